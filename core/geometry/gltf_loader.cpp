@@ -1,0 +1,277 @@
+// glTF 2.0 geometry import via tinygltf: triangles of every mesh instanced by the scene's node tree,
+// with node transforms baked in and texture coordinates converted to Specula's v-up convention.
+//
+// Debian's libtinygltf-dev ships the header plus a shared library that specula_core does not link,
+// so the implementation is compiled here, in exactly one TU (no other file may define
+// TINYGLTF_IMPLEMENTATION). Images are not needed for geometry, and Debian has no stb headers in
+// /usr/include, so stb is disabled and a no-op image loader is installed.
+#include "core/geometry/mesh_io_detail.h"
+
+#define TINYGLTF_IMPLEMENTATION
+#define TINYGLTF_NO_STB_IMAGE
+#define TINYGLTF_NO_STB_IMAGE_WRITE
+#define TINYGLTF_NO_EXTERNAL_IMAGE
+#include <tiny_gltf.h>
+
+#include <glm/gtc/quaternion.hpp>
+
+#include <algorithm>
+#include <cstring>
+
+namespace specula::detail {
+
+namespace {
+
+bool ignoreImage(tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int,
+                 void*) {
+    return true;
+}
+
+std::string trimmed(std::string s) {
+    while (!s.empty() && (s.back() == '\n' || s.back() == '\r' || s.back() == ' ')) s.pop_back();
+    return s;
+}
+
+// A bounds-checked view of one accessor's elements.
+struct AccessorView {
+    const unsigned char* data = nullptr;
+    size_t stride = 0, count = 0;
+    int componentType = 0, components = 0;
+    bool normalized = false;
+
+    double component(size_t i, int c) const {
+        const unsigned char* q = data + i * stride;
+        switch (componentType) {
+        case TINYGLTF_COMPONENT_TYPE_FLOAT: { float f; std::memcpy(&f, q + 4 * c, 4); return f; }
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: { double x = q[c]; return normalized ? x / 255.0 : x; }
+        case TINYGLTF_COMPONENT_TYPE_BYTE: {
+            double x = double(int8_t(q[c]));
+            return normalized ? std::max(x / 127.0, -1.0) : x;
+        }
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
+            uint16_t s; std::memcpy(&s, q + 2 * c, 2);
+            return normalized ? s / 65535.0 : double(s);
+        }
+        case TINYGLTF_COMPONENT_TYPE_SHORT: {
+            int16_t s; std::memcpy(&s, q + 2 * c, 2);
+            return normalized ? std::max(s / 32767.0, -1.0) : double(s);
+        }
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: { uint32_t u; std::memcpy(&u, q + 4 * c, 4); return u; }
+        default: return 0.0;
+        }
+    }
+    uint32_t index(size_t i) const {
+        const unsigned char* q = data + i * stride;
+        switch (componentType) {
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return q[0];
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: { uint16_t s; std::memcpy(&s, q, 2); return s; }
+        default: { uint32_t u; std::memcpy(&u, q, 4); return u; }
+        }
+    }
+};
+
+class GltfImporter {
+public:
+    GltfImporter(const std::string& path, const tinygltf::Model& model) : path_(path), m_(model) {}
+
+    TriangleMesh run() {
+        std::vector<int> roots;
+        if (!m_.scenes.empty()) {
+            if (m_.defaultScene >= 0 && size_t(m_.defaultScene) < m_.scenes.size()) {
+                roots = m_.scenes[size_t(m_.defaultScene)].nodes;
+            } else {
+                for (const auto& scene : m_.scenes) roots.insert(roots.end(), scene.nodes.begin(), scene.nodes.end());
+            }
+        } else {
+            // No scene: every node that is nobody's child is a root.
+            std::vector<bool> isChild(m_.nodes.size(), false);
+            for (const auto& node : m_.nodes)
+                for (int c : node.children)
+                    if (c >= 0 && size_t(c) < isChild.size()) isChild[size_t(c)] = true;
+            for (size_t i = 0; i < m_.nodes.size(); ++i)
+                if (!isChild[i]) roots.push_back(int(i));
+            if (m_.nodes.empty())  // bare meshes, no node tree at all: take them untransformed
+                for (size_t i = 0; i < m_.meshes.size(); ++i) addMesh(int(i), glm::dmat4(1.0));
+        }
+        for (int r : roots) visit(r, glm::dmat4(1.0), 0);
+        if (parts_.empty())
+            throwMeshError(path_, skippedPrimitives_ ? "no triangles (only non-triangle primitives)" : "no triangles");
+        return mergeMeshParts(parts_);
+    }
+
+private:
+    const std::string& path_;
+    const tinygltf::Model& m_;
+    std::vector<TriangleMesh> parts_;
+    int skippedPrimitives_ = 0;
+
+    static glm::dmat4 localTransform(const tinygltf::Node& node) {
+        if (node.matrix.size() == 16) {
+            glm::dmat4 M;
+            for (int c = 0; c < 4; ++c)
+                for (int r = 0; r < 4; ++r) M[c][r] = node.matrix[size_t(c * 4 + r)];  // column-major
+            return M;
+        }
+        glm::dmat4 T(1.0), R(1.0), S(1.0);
+        if (node.translation.size() == 3)
+            T[3] = glm::dvec4(node.translation[0], node.translation[1], node.translation[2], 1.0);
+        if (node.rotation.size() == 4) {  // glTF stores (x, y, z, w)
+            glm::dquat q(node.rotation[3], node.rotation[0], node.rotation[1], node.rotation[2]);
+            R = glm::mat4_cast(glm::normalize(q));
+        }
+        if (node.scale.size() == 3) {
+            S[0][0] = node.scale[0];
+            S[1][1] = node.scale[1];
+            S[2][2] = node.scale[2];
+        }
+        return T * R * S;  // glTF: M = T * R * S
+    }
+
+    void visit(int nodeIndex, const glm::dmat4& parent, size_t depth) {
+        if (nodeIndex < 0 || size_t(nodeIndex) >= m_.nodes.size())
+            throwMeshError(path_, "node index " + std::to_string(nodeIndex) + " out of range");
+        if (depth > m_.nodes.size()) throwMeshError(path_, "node hierarchy contains a cycle");
+        const tinygltf::Node& node = m_.nodes[size_t(nodeIndex)];
+        glm::dmat4 M = parent * localTransform(node);
+        if (node.mesh >= 0) addMesh(node.mesh, M);
+        for (int c : node.children) visit(c, M, depth + 1);
+    }
+
+    AccessorView view(int accessorIndex, const char* what, std::initializer_list<int> types) const {
+        if (accessorIndex < 0 || size_t(accessorIndex) >= m_.accessors.size())
+            throwMeshError(path_, std::string(what) + ": accessor index out of range");
+        const tinygltf::Accessor& acc = m_.accessors[size_t(accessorIndex)];
+        if (acc.sparse.isSparse) throwMeshError(path_, std::string(what) + ": sparse accessors are not supported");
+        if (std::find(types.begin(), types.end(), acc.type) == types.end())
+            throwMeshError(path_, std::string(what) + ": unexpected accessor type");
+        if (acc.bufferView < 0 || size_t(acc.bufferView) >= m_.bufferViews.size())
+            throwMeshError(path_, std::string(what) + ": accessor has no valid bufferView");
+        const tinygltf::BufferView& bv = m_.bufferViews[size_t(acc.bufferView)];
+        if (bv.buffer < 0 || size_t(bv.buffer) >= m_.buffers.size())
+            throwMeshError(path_, std::string(what) + ": bufferView has no valid buffer");
+        const tinygltf::Buffer& buf = m_.buffers[size_t(bv.buffer)];
+        int compSize = tinygltf::GetComponentSizeInBytes(uint32_t(acc.componentType));
+        int nComp = tinygltf::GetNumComponentsInType(uint32_t(acc.type));
+        int stride = acc.ByteStride(bv);
+        if (compSize <= 0 || nComp <= 0 || stride <= 0)
+            throwMeshError(path_, std::string(what) + ": invalid component type or byteStride");
+        size_t begin = bv.byteOffset + acc.byteOffset;
+        size_t viewEnd = std::min(bv.byteOffset + bv.byteLength, buf.data.size());
+        size_t elemSize = size_t(compSize) * size_t(nComp);
+        if (acc.count > 0 && (begin > viewEnd || (acc.count - 1) * size_t(stride) + elemSize > viewEnd - begin))
+            throwMeshError(path_, std::string(what) + ": accessor exceeds its buffer");
+        AccessorView v;
+        v.data = buf.data.data() + begin;
+        v.stride = size_t(stride);
+        v.count = acc.count;
+        v.componentType = acc.componentType;
+        v.components = nComp;
+        v.normalized = acc.normalized;
+        return v;
+    }
+
+    void addMesh(int meshIndex, const glm::dmat4& M) {
+        if (meshIndex < 0 || size_t(meshIndex) >= m_.meshes.size())
+            throwMeshError(path_, "mesh index " + std::to_string(meshIndex) + " out of range");
+        glm::dmat3 M3(M);
+        double det = glm::determinant(M3);
+        glm::dmat3 normalMatrix = glm::transpose(glm::inverse(M3));  // normals transform by M^-T
+        double handedness = det < 0 ? -1.0 : 1.0;
+        for (const tinygltf::Primitive& prim : m_.meshes[size_t(meshIndex)].primitives) {
+            if (prim.mode != -1 && prim.mode != TINYGLTF_MODE_TRIANGLES) {
+                ++skippedPrimitives_;
+                continue;
+            }
+            auto attr = [&](const char* name) {
+                auto it = prim.attributes.find(name);
+                return it == prim.attributes.end() ? -1 : it->second;
+            };
+            if (attr("POSITION") < 0) throwMeshError(path_, "mesh primitive without POSITION");
+            TriangleMesh part;
+            AccessorView pos = view(attr("POSITION"), "POSITION", {TINYGLTF_TYPE_VEC3});
+            size_t n = pos.count;
+            part.positions.resize(n);
+            for (size_t i = 0; i < n; ++i) {
+                glm::dvec4 p = M * glm::dvec4(pos.component(i, 0), pos.component(i, 1), pos.component(i, 2), 1.0);
+                part.positions[i] = Vec3(p);
+            }
+            if (attr("NORMAL") >= 0) {
+                AccessorView nv = view(attr("NORMAL"), "NORMAL", {TINYGLTF_TYPE_VEC3});
+                if (nv.count != n) throwMeshError(path_, "NORMAL count differs from POSITION count");
+                part.normals.resize(n);
+                for (size_t i = 0; i < n; ++i) {
+                    glm::dvec3 nn = normalMatrix * glm::dvec3(nv.component(i, 0), nv.component(i, 1), nv.component(i, 2));
+                    double len = glm::length(nn);
+                    part.normals[i] = len > 0 ? Vec3(nn / len) : Vec3(0, 0, 1);
+                }
+            }
+            if (attr("TEXCOORD_0") >= 0) {
+                AccessorView tv = view(attr("TEXCOORD_0"), "TEXCOORD_0", {TINYGLTF_TYPE_VEC2});
+                if (tv.count != n) throwMeshError(path_, "TEXCOORD_0 count differs from POSITION count");
+                part.uvs.resize(n);
+                // glTF puts v = 0 at the top of the image; Specula (like OpenGL and OBJ) puts v = 0 at
+                // the bottom, so v' = 1 - v. The image itself is not flipped.
+                for (size_t i = 0; i < n; ++i)
+                    part.uvs[i] = Vec2(float(tv.component(i, 0)), float(1.0 - tv.component(i, 1)));
+            }
+            if (attr("TANGENT") >= 0) {
+                AccessorView tv = view(attr("TANGENT"), "TANGENT", {TINYGLTF_TYPE_VEC4});
+                if (tv.count != n) throwMeshError(path_, "TANGENT count differs from POSITION count");
+                part.tangents.resize(n);
+                // glTF's bitangent cross(n, t) * w points "up" in the image (its normal maps are +Y up,
+                // OpenGL style), i.e. towards decreasing glTF v = increasing Specula v. So glTF's w already
+                // describes Specula's +v bitangent and the v' = 1 - v conversion must NOT negate it
+                // (glTF-Sample-Models#174, KhronosGroup/glTF#2046: MikkTSpace reproduces glTF tangents only
+                // when fed 1 - v). Only a mirroring node transform (det < 0) flips the handedness.
+                for (size_t i = 0; i < n; ++i) {
+                    glm::dvec3 t = M3 * glm::dvec3(tv.component(i, 0), tv.component(i, 1), tv.component(i, 2));
+                    double len = glm::length(t);
+                    double w = tv.component(i, 3) < 0 ? -1.0 : 1.0;
+                    part.tangents[i] = Vec4(len > 0 ? Vec3(t / len) : Vec3(1, 0, 0), float(w * handedness));
+                }
+            }
+            std::vector<uint32_t> idx;
+            if (prim.indices >= 0) {
+                AccessorView iv = view(prim.indices, "indices", {TINYGLTF_TYPE_SCALAR});
+                if (iv.componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE &&
+                    iv.componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
+                    iv.componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT)
+                    throwMeshError(path_, "indices must be unsigned byte, short or int");
+                idx.resize(iv.count);
+                for (size_t i = 0; i < iv.count; ++i) {
+                    idx[i] = iv.index(i);
+                    if (idx[i] >= n)
+                        throwMeshError(path_, "vertex index " + std::to_string(idx[i]) + " out of range (" +
+                                                  std::to_string(n) + " vertices)");
+                }
+            } else {
+                idx.resize(n);
+                for (size_t i = 0; i < n; ++i) idx[i] = uint32_t(i);
+            }
+            // glTF: a node transform with negative determinant turns the winding clockwise; restore
+            // counter-clockwise so that the geometric and shading normals keep agreeing.
+            for (size_t t = 0; t + 2 < idx.size(); t += 3) {
+                if (det < 0)
+                    part.indices.emplace_back(idx[t], idx[t + 2], idx[t + 1]);
+                else
+                    part.indices.emplace_back(idx[t], idx[t + 1], idx[t + 2]);
+            }
+            if (!part.indices.empty()) parts_.push_back(std::move(part));
+        }
+    }
+};
+
+}  // namespace
+
+TriangleMesh loadGltfMesh(const std::string& path, bool binary) {
+    tinygltf::TinyGLTF loader;
+    loader.SetImageLoader(&ignoreImage, nullptr);
+    tinygltf::Model model;
+    std::string err, warn;
+    bool ok = binary ? loader.LoadBinaryFromFile(&model, &err, &warn, path)
+                     : loader.LoadASCIIFromFile(&model, &err, &warn, path);
+    if (!ok) throwMeshError(path, "glTF parse error: " + (err.empty() ? std::string("unknown error") : trimmed(err)));
+    return GltfImporter(path, model).run();
+}
+
+}  // namespace specula::detail

@@ -1,0 +1,47 @@
+// Triangle meshes as the renderer consumes them, and the analytic-surface hook that built-in
+// shapes use to give exact UVs, normals and tangents at a hit on their tessellation.
+#pragma once
+
+#include "core/math/math.h"
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace specula {
+
+// Object-space triangle mesh. Optional attribute arrays are either empty or sized like positions.
+struct TriangleMesh {
+    std::vector<Vec3> positions;
+    std::vector<Vec3> normals;    // per-vertex shading normals (empty: flat shading)
+    std::vector<Vec4> tangents;   // xyz = unit tangent along +u, w = handedness sign of the bitangent (+v)
+    std::vector<Vec2> uvs;        // per-vertex texture coordinates
+    std::vector<glm::uvec3> indices;
+
+    size_t triangleCount() const { return indices.size(); }
+};
+
+// Exact differential geometry of a parametric surface (object space).
+struct SurfaceGeometry {
+    Vec3 p;           // point on the exact surface
+    Vec3 n;           // unit outward normal
+    Vec2 uv;          // surface parameters in [0,1]^2
+    Vec3 dpdu, dpdv;  // position partials
+    Vec3 dndu, dndv;  // normal partials (Weingarten equations)
+};
+
+// A built-in shape knows its exact surface; hits on its tessellation are projected onto it so that
+// UVs, tangents, normals and their derivatives are exact and continuous across triangle edges.
+class AnalyticSurface {
+public:
+    virtual ~AnalyticSurface() = default;
+    // pObject: a point on (or very near) the tessellation, in object space.
+    virtual SurfaceGeometry at(const Vec3& pObject) const = 0;
+};
+
+struct BuiltinShape {
+    TriangleMesh mesh;
+    std::shared_ptr<const AnalyticSurface> surface;  // null for meshes loaded from files
+};
+
+}  // namespace specula

@@ -1,0 +1,550 @@
+// Image output and comparison with OpenImageIO: multi-layer float EXR, OCIO-viewed 8-bit PNG (both written
+// atomically via temp file + rename), ImageSet reading by "layer." prefix, RMSE/MAE/PSNR and a diff map.
+#include "core/io/image_io.h"
+
+#include "core/color/color_config.h"
+
+#include <OpenImageIO/imagebuf.h>
+#include <OpenImageIO/imagebufalgo.h>
+#include <OpenImageIO/imageio.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <set>
+#include <sstream>
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+namespace fs = std::filesystem;
+
+namespace specula {
+
+namespace {
+
+constexpr const char* kChannelOrderAttr = "specula:channels";  // comma-separated channel names as written
+// OIIO 2.4 does not store "oiio:*" attributes in EXR headers (and reports "Linear" for every EXR), so the
+// working colorspace is also written under this name; readImageSet maps it back to "oiio:ColorSpace".
+constexpr const char* kColorSpaceAttr = "specula:colorSpace";
+
+mode_t currentUmask() {
+    // Read without changing it (umask() is process-global and racy): Linux >= 4.7 reports it here.
+    std::ifstream f("/proc/self/status");
+    std::string line;
+    while (std::getline(f, line)) {
+        if (line.rfind("Umask:", 0) == 0) return mode_t(std::strtol(line.c_str() + 6, nullptr, 8));
+    }
+    return 022;
+}
+
+void removeQuietly(const std::string& p) {
+    std::error_code ec;
+    fs::remove(p, ec);
+}
+
+std::string joinNames(const std::vector<std::string>& v) {
+    std::string s;
+    for (size_t i = 0; i < v.size(); ++i) s += (i ? ", " : "") + v[i];
+    return s;
+}
+
+// Writes an uint8 or float image with OIIO to 'path' atomically.
+void writeImageAtomic(const std::string& path, const OIIO::ImageSpec& spec, const void* data, const char* format,
+                      const char* what) {
+    std::string tmp = createTempFileNear(path);
+    try {
+        auto out = OIIO::ImageOutput::create(format);  // by format name: 'path' may lack an extension
+        if (!out) throw ImageIoError(std::string("cannot write ") + what + " '" + path + "': " + OIIO::geterror());
+        if (!out->open(tmp, spec))
+            throw ImageIoError(std::string("cannot write ") + what + " '" + path + "': " + out->geterror());
+        if (!out->write_image(spec.format, data)) {
+            std::string err = out->geterror();
+            out->close();
+            throw ImageIoError(std::string("cannot write ") + what + " '" + path + "': " + err);
+        }
+        if (!out->close())
+            throw ImageIoError(std::string("cannot write ") + what + " '" + path + "': " + out->geterror());
+    } catch (...) {
+        removeQuietly(tmp);
+        throw;
+    }
+    commitTempFile(tmp, path);
+}
+
+// Order of channels inside a layer: R,G,B,A / X,Y,Z,W / U,V / others in file order.
+int channelRank(const std::string& c) {
+    static const char* order[] = {"R", "G", "B", "A", "X", "Y", "Z", "W", "U", "V"};
+    for (int i = 0; i < 10; ++i)
+        if (c == order[i]) return i;
+    return 100;
+}
+
+std::vector<uint8_t> quantise8(const std::vector<float>& v) {
+    std::vector<uint8_t> out(v.size());
+    for (size_t i = 0; i < v.size(); ++i) {
+        float x = v[i];
+        if (!(x > 0.f)) x = 0.f;  // also NaN -> 0
+        if (x > 1.f) x = 1.f;
+        out[i] = uint8_t(std::lround(x * 255.f));
+    }
+    return out;
+}
+
+}  // namespace
+
+const AovBuffer* ImageSet::find(const std::string& name) const {
+    for (const auto& a : aovs)
+        if (a.name == name) return &a;
+    return nullptr;
+}
+
+// ---- atomic files ---------------------------------------------------------------------------------
+
+std::string createTempFileNear(const std::string& path) {
+    fs::path p(path);
+    fs::path dir = p.parent_path();
+    if (dir.empty()) dir = ".";
+    std::string stem = p.stem().string();
+    std::string ext = p.extension().string();
+    std::string tmpl = (dir / ("." + stem + ".tmp-XXXXXX" + ext)).string();
+    std::vector<char> buf(tmpl.begin(), tmpl.end());
+    buf.push_back('\0');
+    int fd = mkstemps(buf.data(), int(ext.size()));
+    if (fd < 0)
+        throw ImageIoError("cannot create a file in '" + dir.string() + "' (for '" + path + "'): " +
+                           std::strerror(errno));
+    // mkstemps creates the file 0600; give it the permissions a normal open() would.
+    fchmod(fd, 0666 & ~currentUmask());
+    ::close(fd);
+    return std::string(buf.data());
+}
+
+void commitTempFile(const std::string& tmpPath, const std::string& path) {
+    int fd = ::open(tmpPath.c_str(), O_RDONLY);
+    if (fd >= 0) {
+        ::fsync(fd);
+        ::close(fd);
+    }
+    if (std::rename(tmpPath.c_str(), path.c_str()) != 0) {
+        int e = errno;
+        removeQuietly(tmpPath);
+        throw ImageIoError("cannot rename '" + tmpPath + "' to '" + path + "': " + std::strerror(e));
+    }
+}
+
+void writeFileAtomic(const std::string& path, const std::string& bytes) {
+    std::string tmp = createTempFileNear(path);
+    {
+        std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
+        f.write(bytes.data(), std::streamsize(bytes.size()));
+        f.flush();
+        if (!f) {
+            removeQuietly(tmp);
+            throw ImageIoError("cannot write '" + path + "' (temp '" + tmp + "')");
+        }
+    }
+    commitTempFile(tmp, path);
+}
+
+// ---- EXR ------------------------------------------------------------------------------------------
+
+void writeExr(const std::string& path, const ImageSet& images, const ColorConfig& color) {
+    const int w = images.width, h = images.height;
+    if (w <= 0 || h <= 0) throw ImageIoError("cannot write '" + path + "': empty image");
+    if (images.aovs.empty()) throw ImageIoError("cannot write '" + path + "': no AOVs");
+    const size_t npix = size_t(w) * size_t(h);
+
+    std::vector<std::string> names;
+    std::set<std::string> seen;
+    int alphaChannel = -1;
+    for (const auto& aov : images.aovs) {
+        if (aov.channels() <= 0) throw ImageIoError("cannot write '" + path + "': AOV '" + aov.name + "' has no channels");
+        if (aov.pixels.size() != npix * size_t(aov.channels()))
+            throw ImageIoError("cannot write '" + path + "': AOV '" + aov.name + "' has " +
+                               std::to_string(aov.pixels.size()) + " floats, expected " +
+                               std::to_string(npix * size_t(aov.channels())));
+        for (const auto& c : aov.channelNames) {
+            std::string n = aov.name == "beauty" ? c : aov.name + "." + c;
+            if (!seen.insert(n).second) throw ImageIoError("cannot write '" + path + "': duplicate channel '" + n + "'");
+            if (aov.name == "beauty" && c == "A") alphaChannel = int(names.size());
+            names.push_back(n);
+        }
+    }
+    const int nch = int(names.size());
+
+    std::vector<float> data(npix * size_t(nch));
+    int off = 0;
+    for (const auto& aov : images.aovs) {
+        const int c = aov.channels();
+        for (size_t i = 0; i < npix; ++i)
+            std::copy_n(&aov.pixels[i * size_t(c)], c, &data[i * size_t(nch) + size_t(off)]);
+        off += c;
+    }
+
+    OIIO::ImageSpec spec(w, h, nch, OIIO::TypeDesc::FLOAT);
+    spec.channelnames = names;
+    spec.alpha_channel = alphaChannel;
+    spec.z_channel = -1;
+    spec.attribute("compression", "zip");
+    for (const auto& [k, v] : images.metadata) spec.attribute(k, v);
+    spec.attribute("oiio:ColorSpace", color.workingSpace());
+    spec.attribute(kColorSpaceAttr, color.workingSpace());
+    bool commaFree = std::none_of(names.begin(), names.end(), [](const std::string& n) {
+        return n.find(',') != std::string::npos;
+    });
+    if (commaFree) {
+        std::string order;
+        for (size_t i = 0; i < names.size(); ++i) order += (i ? "," : "") + names[i];
+        spec.attribute(kChannelOrderAttr, order);
+    }
+    writeImageAtomic(path, spec, data.data(), "openexr", "EXR");
+}
+
+// ---- PNG ------------------------------------------------------------------------------------------
+
+void writePng(const std::string& path, const ImageSet& images, const ColorConfig& color, const std::string& view,
+              float exposureStops) {
+    const AovBuffer* beauty = images.find("beauty");
+    if (!beauty && !images.aovs.empty()) beauty = &images.aovs.front();
+    if (!beauty) throw ImageIoError("cannot write '" + path + "': no beauty AOV");
+    const int w = images.width, h = images.height;
+    const size_t npix = size_t(w) * size_t(h);
+    const int c = beauty->channels();
+    if (w <= 0 || h <= 0 || c <= 0 || beauty->pixels.size() != npix * size_t(c))
+        throw ImageIoError("cannot write '" + path + "': beauty AOV size does not match the image");
+
+    auto idx = [&](const char* n) {
+        for (int i = 0; i < c; ++i)
+            if (beauty->channelNames[size_t(i)] == n) return i;
+        return -1;
+    };
+    int ir = idx("R"), ig = idx("G"), ib = idx("B"), ia = idx("A");
+    if (ir < 0 || ig < 0 || ib < 0) {  // not named RGB: first three channels, or grey
+        ir = 0;
+        ig = std::min(1, c - 1);
+        ib = std::min(2, c - 1);
+        if (c == 2 || c == 4) ia = c - 1;
+        if (c == 2) ig = ib = 0;
+    }
+    const bool hasAlpha = ia >= 0;
+
+    std::vector<float> rgb(npix * 3);
+    std::vector<float> alpha(hasAlpha ? npix : 0);
+    for (size_t i = 0; i < npix; ++i) {
+        const float* p = &beauty->pixels[i * size_t(c)];
+        float a = hasAlpha ? p[ia] : 1.f;
+        // The beauty is premultiplied; PNG stores unassociated colour.
+        float inv = (hasAlpha && a > 0.f) ? 1.f / a : 1.f;
+        rgb[i * 3 + 0] = p[ir] * inv;
+        rgb[i * 3 + 1] = p[ig] * inv;
+        rgb[i * 3 + 2] = p[ib] * inv;
+        if (hasAlpha) alpha[i] = a;
+    }
+    try {
+        color.toDisplay(rgb.data(), npix, view, exposureStops);
+    } catch (const ColorError& e) {
+        throw ImageIoError("cannot write '" + path + "': " + e.what());
+    }
+
+    const int outc = hasAlpha ? 4 : 3;
+    std::vector<float> packed(npix * size_t(outc));
+    for (size_t i = 0; i < npix; ++i) {
+        for (int k = 0; k < 3; ++k) packed[i * size_t(outc) + size_t(k)] = rgb[i * 3 + size_t(k)];
+        if (hasAlpha) packed[i * 4 + 3] = alpha[i];
+    }
+    std::vector<uint8_t> bytes = quantise8(packed);
+
+    OIIO::ImageSpec spec(w, h, outc, OIIO::TypeDesc::UINT8);
+    if (hasAlpha) {
+        spec.alpha_channel = 3;
+        spec.attribute("oiio:UnassociatedAlpha", 1);
+    }
+    spec.attribute("oiio:ColorSpace", "sRGB");
+    spec.attribute("Software", std::string("Specula ") +
+#ifdef SPECULA_VERSION
+                                   SPECULA_VERSION
+#else
+                                   ""
+#endif
+    );
+    for (const auto& [k, v] : images.metadata) spec.attribute(k, v);
+    writeImageAtomic(path, spec, bytes.data(), "png", "PNG");
+}
+
+// ---- reading --------------------------------------------------------------------------------------
+
+ImageSet readImageSet(const std::string& path) {
+    std::error_code ec;
+    if (!fs::exists(path, ec)) throw ImageIoError("image file not found: '" + path + "'");
+    OIIO::ImageSpec config;
+    config.attribute("oiio:UnassociatedAlpha", 1);  // the file's values, unaltered
+    auto in = OIIO::ImageInput::open(path, &config);
+    if (!in) throw ImageIoError("cannot read image '" + path + "': " + OIIO::geterror());
+
+    ImageSet set;
+    struct Chan {
+        std::string layer, name;
+        const float* src;
+        int stride;
+    };
+    std::vector<std::vector<float>> buffers;
+    std::vector<Chan> chans;
+    std::vector<std::string> fileOrder;  // full channel names, as written (if recorded)
+
+    for (int sub = 0; in->seek_subimage(sub, 0); ++sub) {
+        OIIO::ImageSpec spec = in->spec();
+        if (sub == 0) {
+            set.width = spec.width;
+            set.height = spec.height;
+            for (const auto& p : spec.extra_attribs) {
+                if (p.type() != OIIO::TypeString) continue;
+                std::string key = p.name().string();
+                if (key == kChannelOrderAttr) {
+                    std::string v = p.get_string();
+                    std::stringstream ss(v);
+                    std::string item;
+                    while (std::getline(ss, item, ',')) fileOrder.push_back(item);
+                    continue;
+                }
+                set.metadata[key] = p.get_string();
+            }
+            auto cs = set.metadata.find(kColorSpaceAttr);
+            if (cs != set.metadata.end()) set.metadata["oiio:ColorSpace"] = cs->second;
+        } else if (spec.width != set.width || spec.height != set.height) {
+            continue;  // parts of another size cannot live in one ImageSet
+        }
+        if (spec.depth > 1) throw ImageIoError("cannot read '" + path + "': volume images are not supported");
+        std::string partName = sub > 0 ? std::string(spec.get_string_attribute("name")) : std::string();
+        buffers.emplace_back(size_t(spec.width) * size_t(spec.height) * size_t(spec.nchannels));
+        if (!in->read_image(sub, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, buffers.back().data()))
+            throw ImageIoError("cannot read image '" + path + "': " + in->geterror());
+        for (int ch = 0; ch < spec.nchannels; ++ch) {
+            std::string full = ch < int(spec.channelnames.size()) ? spec.channelnames[size_t(ch)]
+                                                                   : "channel" + std::to_string(ch);
+            Chan c{"", "", buffers.back().data() + ch, spec.nchannels};
+            auto dot = full.rfind('.');
+            if (dot != std::string::npos && dot > 0 && dot + 1 < full.size()) {
+                c.layer = full.substr(0, dot);
+                c.name = full.substr(dot + 1);
+                if (!partName.empty()) c.layer = partName + "." + c.layer;
+            } else if (!partName.empty()) {
+                c.layer = partName;
+                c.name = full;
+            } else if (full == "R" || full == "G" || full == "B" || full == "A" || full == "Y") {
+                c.layer = "beauty";
+                c.name = full;
+            } else if (full == "Z") {
+                c.layer = "depth";
+                c.name = "Z";
+            } else {
+                c.layer = full;
+                c.name = full;
+            }
+            chans.push_back(c);
+        }
+    }
+    in->close();
+    if (set.width <= 0 || set.height <= 0 || chans.empty())
+        throw ImageIoError("cannot read image '" + path + "': no pixels");
+
+    // Channel order: as recorded by writeExr if it matches, else beauty first, layers by first
+    // appearance, channels inside a layer R,G,B,A / X,Y,Z / U,V / others.
+    auto fullName = [](const Chan& c) { return c.layer == "beauty" ? c.name : c.layer + "." + c.name; };
+    bool useRecorded = fileOrder.size() == chans.size();
+    if (useRecorded) {
+        std::vector<Chan> ordered;
+        for (const auto& n : fileOrder) {
+            auto it = std::find_if(chans.begin(), chans.end(), [&](const Chan& c) { return fullName(c) == n; });
+            if (it == chans.end()) {
+                useRecorded = false;
+                break;
+            }
+            ordered.push_back(*it);
+        }
+        if (useRecorded) chans = ordered;
+    }
+    if (!useRecorded) {
+        std::vector<std::string> layers;
+        for (const auto& c : chans)
+            if (std::find(layers.begin(), layers.end(), c.layer) == layers.end()) layers.push_back(c.layer);
+        auto beautyIt = std::find(layers.begin(), layers.end(), "beauty");
+        if (beautyIt != layers.end()) std::rotate(layers.begin(), beautyIt, beautyIt + 1);
+        std::vector<Chan> ordered;
+        for (const auto& l : layers) {
+            std::vector<Chan> group;
+            for (const auto& c : chans)
+                if (c.layer == l) group.push_back(c);
+            std::stable_sort(group.begin(), group.end(),
+                             [](const Chan& a, const Chan& b) { return channelRank(a.name) < channelRank(b.name); });
+            ordered.insert(ordered.end(), group.begin(), group.end());
+        }
+        chans = ordered;
+    }
+
+    const size_t npix = size_t(set.width) * size_t(set.height);
+    for (size_t i = 0; i < chans.size();) {
+        size_t j = i;
+        while (j < chans.size() && chans[j].layer == chans[i].layer) ++j;
+        AovBuffer aov;
+        aov.name = chans[i].layer;
+        const size_t n = j - i;
+        for (size_t k = i; k < j; ++k) aov.channelNames.push_back(chans[k].name);
+        aov.pixels.resize(npix * n);
+        for (size_t p = 0; p < npix; ++p)
+            for (size_t k = 0; k < n; ++k) aov.pixels[p * n + k] = chans[i + k].src[p * size_t(chans[i + k].stride)];
+        set.aovs.push_back(std::move(aov));
+        i = j;
+    }
+    return set;
+}
+
+// ---- comparison -----------------------------------------------------------------------------------
+
+namespace {
+
+std::vector<std::string> aovNames(const ImageSet& s) {
+    std::vector<std::string> v;
+    for (const auto& a : s.aovs) v.push_back(a.name);
+    return v;
+}
+
+double meanOf(const OIIO::ImageBuf& buf) {
+    auto stats = OIIO::ImageBufAlgo::computePixelStats(buf);
+    if (stats.avg.empty()) return std::numeric_limits<double>::quiet_NaN();
+    double s = 0;
+    for (float a : stats.avg) s += a;
+    return s / double(stats.avg.size());
+}
+
+// Renders 'text' in white on a dark strip of width w; false if OIIO cannot render text (no font).
+bool renderTextStrip(const std::string& text, int w, OIIO::ImageBuf& strip) {
+    const int fontSize = 13, h = 18;
+    for (const char* font : {"", "DejaVuSans", "DejaVuSansMono", "LiberationSans-Regular", "FreeSans"}) {
+        OIIO::ImageBuf buf(OIIO::ImageSpec(w, h, 3, OIIO::TypeDesc::FLOAT));
+        const float bg[3] = {0.08f, 0.08f, 0.08f};
+        OIIO::ImageBufAlgo::fill(buf, bg);
+        const float white[3] = {1.f, 1.f, 1.f};
+        if (OIIO::ImageBufAlgo::render_text(buf, 3, h - 5, text, fontSize, font, white)) {
+            strip = std::move(buf);
+            return true;
+        }
+        (void)buf.geterror();  // clear the error
+    }
+    (void)OIIO::geterror();
+    return false;
+}
+
+void writeDiffPng(const std::string& diffPng, const AovBuffer& a, const AovBuffer& b, int w, int h) {
+    const size_t npix = size_t(w) * size_t(h);
+    const int c = a.channels();
+    std::vector<float> d(npix);
+    for (size_t i = 0; i < npix; ++i) {
+        double s = 0;
+        for (int k = 0; k < c; ++k) s += std::fabs(double(a.pixels[i * size_t(c) + size_t(k)]) -
+                                                   double(b.pixels[i * size_t(c) + size_t(k)]));
+        float v = float(s / c);
+        d[i] = std::isfinite(v) ? v : 0.f;
+    }
+    std::vector<float> sorted = d;
+    float maxV = sorted.empty() ? 0.f : *std::max_element(sorted.begin(), sorted.end());
+    size_t k99 = sorted.empty() ? 0 : std::min(sorted.size() - 1, size_t(std::ceil(0.99 * double(sorted.size()))) - 1);
+    float p99 = 0.f;
+    if (!sorted.empty()) {
+        std::nth_element(sorted.begin(), sorted.begin() + std::ptrdiff_t(k99), sorted.end());
+        p99 = sorted[k99];
+    }
+    float scale = p99 > 0.f ? p99 : (maxV > 0.f ? maxV : 1.f);
+
+    const int gap = 2;
+    const int barH = std::clamp(h / 12, 6, 24);
+    const int totalH = h + gap + barH;
+    OIIO::ImageBuf norm(OIIO::ImageSpec(w, totalH, 1, OIIO::TypeDesc::FLOAT));
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            float v = std::min(d[size_t(y) * size_t(w) + size_t(x)] / scale, 1.f);
+            norm.setpixel(x, y, &v, 1);
+        }
+    for (int y = h; y < totalH; ++y)
+        for (int x = 0; x < w; ++x) {
+            float v = w > 1 ? float(x) / float(w - 1) : 1.f;
+            norm.setpixel(x, y, &v, 1);
+        }
+    OIIO::ImageBuf mapped = OIIO::ImageBufAlgo::color_map(norm, 0, "viridis");
+    if (mapped.has_error()) throw ImageIoError("cannot write diff map '" + diffPng + "': " + mapped.geterror());
+    const float black[3] = {0.f, 0.f, 0.f};
+    OIIO::ImageBufAlgo::fill(mapped, black, OIIO::ROI(0, w, h, h + gap, 0, 1, 0, 3));
+
+    // Optional caption: the value the top of the bar stands for, and the max difference.
+    char caption[160];
+    std::snprintf(caption, sizeof caption, "bar 0..%.3g (%s)  max %.3g", double(scale),
+                  p99 > 0.f ? "p99" : "max", double(maxV));
+    OIIO::ImageBuf strip;
+    OIIO::ImageBuf out = mapped;
+    if (w >= 48 && renderTextStrip(caption, w, strip)) {
+        int sh = strip.spec().height;
+        OIIO::ImageBuf both(OIIO::ImageSpec(w, totalH + sh, 3, OIIO::TypeDesc::FLOAT));
+        OIIO::ImageBufAlgo::paste(both, 0, 0, 0, 0, mapped);
+        OIIO::ImageBufAlgo::paste(both, 0, totalH, 0, 0, strip);
+        out = std::move(both);
+    }
+
+    const OIIO::ImageSpec& os = out.spec();
+    std::vector<float> px(size_t(os.width) * size_t(os.height) * 3);
+    out.get_pixels(OIIO::ROI(0, os.width, 0, os.height, 0, 1, 0, 3), OIIO::TypeDesc::FLOAT, px.data());
+    std::vector<uint8_t> bytes = quantise8(px);
+    OIIO::ImageSpec spec(os.width, os.height, 3, OIIO::TypeDesc::UINT8);
+    spec.attribute("oiio:ColorSpace", "sRGB");
+    spec.attribute("specula:diffScale", scale);
+    spec.attribute("specula:diffMax", maxV);
+    writeImageAtomic(diffPng, spec, bytes.data(), "png", "diff PNG");
+}
+
+}  // namespace
+
+CompareResult compareImages(const std::string& pathA, const std::string& pathB, const std::string& aov,
+                            const std::string& diffPng) {
+    std::error_code ec;
+    for (const auto& p : {pathA, pathB})
+        if (!fs::exists(p, ec)) throw ImageIoError("compare: image file not found: '" + p + "'");
+    ImageSet A = readImageSet(pathA);
+    ImageSet B = readImageSet(pathB);
+    const AovBuffer* a = A.find(aov);
+    const AovBuffer* b = B.find(aov);
+    if (!a) throw ImageIoError("compare: AOV '" + aov + "' not in '" + pathA + "'; available: " + joinNames(aovNames(A)));
+    if (!b) throw ImageIoError("compare: AOV '" + aov + "' not in '" + pathB + "'; available: " + joinNames(aovNames(B)));
+    if (A.width != B.width || A.height != B.height || a->channels() != b->channels()) {
+        std::ostringstream ss;
+        ss << "compare: size mismatch for AOV '" << aov << "': '" << pathA << "' is " << A.width << "x" << A.height
+           << "x" << a->channels() << ", '" << pathB << "' is " << B.width << "x" << B.height << "x" << b->channels();
+        throw ImageIoError(ss.str());
+    }
+
+    const int w = A.width, h = A.height, c = a->channels();
+    OIIO::ImageSpec spec(w, h, c, OIIO::TypeDesc::FLOAT);
+    OIIO::ImageBuf bufA(spec, const_cast<float*>(a->pixels.data()));
+    OIIO::ImageBuf bufB(spec, const_cast<float*>(b->pixels.data()));
+    // Thresholds at +max: OIIO 2.4 flags 'error' whenever a pixel exceeds the fail threshold.
+    const float never = std::numeric_limits<float>::max();
+    OIIO::ImageBufAlgo::CompareResults cr = OIIO::ImageBufAlgo::compare(bufA, bufB, never, never);
+    if (cr.error) throw ImageIoError("compare: OpenImageIO failed: " + bufA.geterror() + bufB.geterror());
+
+    CompareResult r;
+    r.width = w;
+    r.height = h;
+    r.channels = c;
+    r.rmse = cr.rms_error;
+    r.mae = cr.meanerror;
+    r.psnr = r.rmse > 0 ? -20.0 * std::log10(r.rmse) : std::numeric_limits<double>::infinity();
+    r.meanA = meanOf(bufA);
+    r.meanB = meanOf(bufB);
+    if (!diffPng.empty()) writeDiffPng(diffPng, *a, *b, w, h);
+    return r;
+}
+
+}  // namespace specula

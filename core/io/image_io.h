@@ -1,0 +1,72 @@
+// Image output and comparison: multi-layer scene-linear EXR with colorspace metadata, OCIO-viewed PNG,
+// all written atomically (temp file + rename); RMSE/MAE/PSNR comparison with a false-colour diff map.
+#pragma once
+
+#include <map>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace specula {
+
+class ColorConfig;
+
+struct ImageIoError : std::runtime_error {
+    using std::runtime_error::runtime_error;
+};
+
+// One AOV: 'channels' floats per pixel, rows top to bottom, linear values.
+// Layer "beauty" is written as the EXR's R,G,B(,A) channels; others as "<name>.R" etc.
+// channelNames: e.g. {"R","G","B"} for colours, {"X","Y","Z"} for normals, {"U","V"}, {"Z"} for depth.
+struct AovBuffer {
+    std::string name;
+    std::vector<std::string> channelNames;
+    std::vector<float> pixels;  // width*height*channelNames.size()
+
+    int channels() const { return int(channelNames.size()); }
+};
+
+struct ImageSet {
+    int width = 0, height = 0;
+    std::vector<AovBuffer> aovs;                 // the first must be "beauty"
+    std::map<std::string, std::string> metadata;  // extra string attributes (e.g. "specula:spp")
+    const AovBuffer* find(const std::string& name) const;
+};
+
+// Writes all AOVs as layers of one EXR (half or float: float), with the working colorspace as
+// "oiio:ColorSpace" metadata. The file appears only when complete: written to a temp file in the
+// same directory, then renamed over 'path'. Throws ImageIoError.
+void writeExr(const std::string& path, const ImageSet& images, const ColorConfig& color);
+
+// Converts the beauty AOV from the working space through the OCIO display/view, writes an 8-bit PNG
+// (sRGB-tagged), atomically. 'view' empty = the config's default view.
+void writePng(const std::string& path, const ImageSet& images, const ColorConfig& color, const std::string& view,
+              float exposureStops = 0.f);
+
+// Reads an EXR written by writeExr (or any image OIIO reads) back into an ImageSet,
+// grouping channels into AOVs by their "layer." prefix (unprefixed RGB(A) -> "beauty").
+ImageSet readImageSet(const std::string& path);
+
+struct CompareResult {
+    double rmse = 0, mae = 0, psnr = 0;  // over all pixels and channels of the compared AOV
+    double meanA = 0, meanB = 0;
+    int width = 0, height = 0, channels = 0;
+};
+
+// Compares AOV 'aov' of two images with OpenImageIO's ImageBufAlgo (compare/computePixelStats).
+// PSNR uses peak 1.0. If diffPng is non-empty, writes a false-colour |A-B| map with a colour bar.
+// Throws ImageIoError on missing files, missing AOV or size mismatch (message names both).
+CompareResult compareImages(const std::string& pathA, const std::string& pathB, const std::string& aov = "beauty",
+                            const std::string& diffPng = "");
+
+// Writes 'bytes' to path atomically (temp file in the same directory + rename).
+void writeFileAtomic(const std::string& path, const std::string& bytes);
+
+// Building blocks of the atomic writes above, for other writers (e.g. the texture cache):
+// creates a unique empty file ".<stem>.tmp-XXXXXX<ext>" next to 'path' and returns its path
+// (throws ImageIoError if the directory does not exist or is not writable) ...
+std::string createTempFileNear(const std::string& path);
+// ... then makes it durable and renames it over 'path'; on failure removes 'tmpPath' and throws ImageIoError.
+void commitTempFile(const std::string& tmpPath, const std::string& path);
+
+}  // namespace specula

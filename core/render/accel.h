@@ -1,0 +1,45 @@
+// Ray intersection through Embree 3 (one BVH over all world-space triangles) and reconstruction of
+// the full shading point (exact analytic attributes, ray differentials) at a hit.
+#pragma once
+
+#include "core/render/ray.h"
+#include "core/render/shading.h"
+
+#include <memory>
+
+namespace specula {
+
+struct Scene;
+
+struct Hit {
+    float t = 0.f;
+    uint32_t shape = 0, prim = 0;
+    float b1 = 0.f, b2 = 0.f;  // barycentrics of vertices 1 and 2
+};
+
+class Accel {
+public:
+    explicit Accel(const Scene& scene);
+    ~Accel();
+    Accel(const Accel&) = delete;
+    Accel& operator=(const Accel&) = delete;
+
+    bool intersect(const Ray& ray, Hit& hit) const;
+    bool occluded(const Ray& ray) const;
+
+    // Builds the shading point of a hit; if the ray carries differentials, computes dp/dx, dp/dy,
+    // duv, dn and dwo (pbrt-v4 SurfaceInteraction::ComputeDifferentials). The geometric and shading
+    // normals are flipped to face the ray's origin side.
+    ShadingPoint shadingPoint(const RayDifferential& ray, const Hit& hit) const;
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+    const Scene& scene_;
+};
+
+// Offset a ray origin off a surface along the geometric normal, towards direction w (robust to
+// self-intersection without an epsilon in t; scale-aware).
+Vec3 offsetRayOrigin(const Vec3& p, const Vec3& ng, const Vec3& w);
+
+}  // namespace specula

@@ -1,0 +1,174 @@
+// Direct lighting and path tracing with next-event estimation and multiple importance sampling
+// (Veach 1997, power heuristic β = 2). Throughputs are kept per first-bounce lobe category so the
+// diffuse and specular AOVs add up exactly to the reflected part of beauty.
+#include "core/render/integrator.h"
+
+#include "core/render/sampling.h"
+#include "core/scene/scene.h"
+
+#include <limits>
+
+namespace specula {
+
+Integrator::Integrator(const Scene& scene, const Accel& accel)
+    : scene_(scene),
+      accel_(accel),
+      path_(scene.render.integrator == IntegratorKind::Path),
+      maxDepth_(scene.render.integrator == IntegratorKind::Path ? scene.render.maxDepth : 0),
+      dimsPerBounce_(uint32_t(2 * scene.lights.size() + 4)) {}
+
+Color3 Integrator::environment(const Vec3& dir) const {
+    Color3 L(0.f);
+    for (const auto& l : scene_.lights)
+        if (l->isEnvironment()) L += l->radiance(dir);
+    return L;
+}
+
+namespace {
+// Radiance weights of the diffuse and specular AOVs along the current path.
+struct Throughput {
+    Color3 d{0.f}, s{0.f};
+    Color3 total() const { return d + s; }
+};
+}  // namespace
+
+SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampler, ScratchArena& arena) const {
+    SampleValue out;
+    Hit hit;
+    if (!accel_.intersect(cameraRay, hit)) {
+        out.beauty = environment(glm::normalize(cameraRay.d));
+        return out;
+    }
+    ShadingPoint sp = accel_.shadingPoint(cameraRay, hit);
+    {
+        const ShapeInstance& sh = scene_.shapes[hit.shape];
+        out.depth = hit.t * glm::dot(cameraRay.d, scene_.camera.lookAt - scene_.camera.position) /
+                    std::max(1e-20f, glm::length(scene_.camera.lookAt - scene_.camera.position));
+        out.uv = sp.uv;
+        out.normal = sp.n;
+        if (sh.areaLight >= 0) {  // lights do not scatter
+            out.beauty = scene_.lights[sh.areaLight]->radiance(glm::normalize(cameraRay.d), sp.frontFacing);
+            return out;
+        }
+    }
+
+    const uint32_t firstBounceDim = 4;  // 0-1 pixel position, 2-3 lens
+    Throughput beta;
+    beta.d = beta.s = Color3(1.f);  // split happens at the first scattering event
+    Color3 emitted(0.f);
+    float prevBsdfPdf = 0.f;
+    bool prevSpecularDelta = true;  // camera ray: no MIS
+    (void)prevSpecularDelta;
+
+    for (int depth = 0;; ++depth) {
+        sampler.setDimension(firstBounceDim + uint32_t(depth) * dimsPerBounce_);
+        arena.reset();
+        sp.depth = depth;
+        const Material& material = *scene_.materials[scene_.shapes[sp.shapeId].material];
+        Closure closure;
+        material.shade(sp, arena, closure);
+        if (material.isEmissive()) {
+            Color3 Le = material.emission(sp);
+            if (depth == 0)
+                emitted += Le;
+            else {
+                out.diffuse += beta.d * Le;
+                out.specular += beta.s * Le;
+            }
+        }
+        const Vec3 wo = sp.frame.toLocal(sp.wo);
+        if (depth == 0) {
+            out.albedo = closure.albedo(wo);
+            out.normal = sp.frame.n;
+        }
+        if (closure.empty()) break;
+
+        // Next-event estimation: one sample of every light.
+        for (size_t li = 0; li < scene_.lights.size(); ++li) {
+            const Light& light = *scene_.lights[li];
+            LightSample ls;
+            Vec2 u = sampler.get2D();
+            if (!light.sample(sp.pGeom, u, ls) || !(ls.pdf > 0.f) || maxComponent(ls.L) <= 0.f) continue;
+            Vec3 wiL = sp.frame.toLocal(ls.wi);
+            // Reject directions on the wrong side of the geometric surface (light leaks through normals).
+            if (glm::dot(ls.wi, sp.ng) <= 0.f) continue;
+            BsdfEval f = closure.eval(wo, wiL);
+            if (maxComponent(f.total()) <= 0.f) continue;
+            Ray shadow;
+            shadow.o = offsetRayOrigin(sp.pGeom, sp.ng, ls.wi);
+            shadow.d = ls.wi;
+            shadow.tMax = std::isinf(ls.distance) ? std::numeric_limits<float>::infinity() : ls.distance * (1.f - 1e-4f);
+            if (accel_.occluded(shadow)) continue;
+            float w = ls.delta ? 1.f : powerHeuristic(ls.pdf, closure.pdf(wo, wiL));
+            Color3 scale = ls.L * (w / ls.pdf);
+            if (depth == 0) {
+                out.diffuse += f.diffuse * scale;
+                out.specular += f.specular * scale;
+            } else {
+                Color3 c = f.total() * scale;
+                out.diffuse += beta.d * c;
+                out.specular += beta.s * c;
+            }
+        }
+
+        // BSDF sampling: hits emitters (MIS) and continues the path.
+        BsdfSample bs;
+        float uLobe = sampler.get1D();
+        Vec2 uDir = sampler.get2D();
+        float uRr = sampler.get1D();
+        if (!closure.sample(wo, uLobe, uDir, bs)) break;
+        Vec3 wiW = sp.frame.toWorld(bs.wi);
+        if (glm::dot(wiW, sp.ng) <= 0.f) break;  // below the geometric surface
+        if (depth == 0) {
+            beta.d = bs.f.diffuse / bs.pdf;
+            beta.s = bs.f.specular / bs.pdf;
+        } else {
+            Color3 m = bs.f.total() / bs.pdf;
+            beta.d *= m;
+            beta.s *= m;
+        }
+        prevBsdfPdf = bs.pdf;
+        if (!isFinite(beta.d) || !isFinite(beta.s)) {
+            out.diffuse = Color3(std::numeric_limits<float>::quiet_NaN());  // counted and dropped by the film
+            break;
+        }
+
+        RayDifferential next;
+        next.o = offsetRayOrigin(sp.pGeom, sp.ng, wiW);
+        next.d = wiW;
+        Hit h;
+        if (!accel_.intersect(next, h)) {
+            for (const auto& l : scene_.lights) {
+                if (!l->isEnvironment()) continue;
+                Color3 Le = l->radiance(wiW);
+                float w = powerHeuristic(prevBsdfPdf, l->pdf(sp.pGeom, wiW, 0.f));
+                out.diffuse += beta.d * Le * w;
+                out.specular += beta.s * Le * w;
+            }
+            break;
+        }
+        const ShapeInstance& nextShape = scene_.shapes[h.shape];
+        if (nextShape.areaLight >= 0) {
+            const Light& l = *scene_.lights[nextShape.areaLight];
+            ShadingPoint lp = accel_.shadingPoint(next, h);
+            Color3 Le = l.radiance(wiW, lp.frontFacing);
+            float w = powerHeuristic(prevBsdfPdf, l.pdf(sp.pGeom, wiW, h.t));
+            out.diffuse += beta.d * Le * w;
+            out.specular += beta.s * Le * w;
+            break;
+        }
+        if (depth >= maxDepth_) break;
+        // Russian roulette after three bounces.
+        if (depth >= 3) {
+            float q = std::max(0.05f, 1.f - maxComponent(beta.total()));
+            if (uRr < q) break;
+            beta.d /= (1.f - q);
+            beta.s /= (1.f - q);
+        }
+        sp = accel_.shadingPoint(next, h);  // secondary vertices carry no differentials
+    }
+    out.beauty = emitted + out.diffuse + out.specular;
+    return out;
+}
+
+}  // namespace specula

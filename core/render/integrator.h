@@ -1,0 +1,38 @@
+// Light transport: a direct-lighting integrator (shadow rays + MIS with BSDF sampling) and a path
+// tracer with next-event estimation and MIS; both split radiance into diffuse/specular AOVs.
+#pragma once
+
+#include "core/render/accel.h"
+#include "core/render/bsdf.h"
+#include "core/render/ray.h"
+#include "core/render/sampler.h"
+
+namespace specula {
+
+struct Scene;
+
+// Everything one camera sample contributes to the film.
+struct SampleValue {
+    Color3 beauty{0.f}, diffuse{0.f}, specular{0.f}, albedo{0.f};
+    Vec3 normal{0.f};
+    Vec2 uv{0.f};
+    float depth = 1e10f;  // camera-space depth along the view axis; 1e10 where the ray escapes (as Cycles)
+};
+
+class Integrator {
+public:
+    Integrator(const Scene& scene, const Accel& accel);
+    // Radiance along a camera ray. 'arena' is reset at every path vertex.
+    SampleValue li(const RayDifferential& cameraRay, PixelSampler& sampler, ScratchArena& arena) const;
+
+private:
+    // Radiance arriving from escaped rays (sum over environment lights).
+    Color3 environment(const Vec3& dir) const;
+    const Scene& scene_;
+    const Accel& accel_;
+    bool path_;
+    int maxDepth_;
+    uint32_t dimsPerBounce_;
+};
+
+}  // namespace specula

@@ -1,0 +1,178 @@
+// Light sampling: delta lights, area-sampled quads, importance-sampled environment maps.
+#include "core/render/lights.h"
+
+#include "core/render/sampling.h"
+
+#include <limits>
+
+namespace specula {
+
+bool PointLight::sample(const Vec3& p, const Vec2&, LightSample& s) const {
+    Vec3 d = p_ - p;
+    float d2 = glm::dot(d, d);
+    if (d2 <= 0.f) return false;
+    s.distance = std::sqrt(d2);
+    s.wi = d / s.distance;
+    s.L = I_ / d2;
+    s.pdf = 1.f;
+    s.delta = true;
+    return true;
+}
+
+SpotLight::SpotLight(const Vec3& p, const Vec3& dir, float coneDegrees, float blend, const Color3& intensity)
+    : p_(p), dir_(glm::normalize(dir)), I_(intensity) {
+    float half = 0.5f * glm::radians(std::clamp(coneDegrees, 0.f, 180.f));
+    cosOuter_ = std::cos(half);
+    cosInner_ = std::cos(half * (1.f - std::clamp(blend, 0.f, 1.f)));
+}
+
+bool SpotLight::sample(const Vec3& p, const Vec2&, LightSample& s) const {
+    Vec3 d = p_ - p;
+    float d2 = glm::dot(d, d);
+    if (d2 <= 0.f) return false;
+    s.distance = std::sqrt(d2);
+    s.wi = d / s.distance;
+    float c = glm::dot(-s.wi, dir_);
+    float falloff;
+    if (c >= cosInner_)
+        falloff = 1.f;
+    else if (c <= cosOuter_)
+        falloff = 0.f;
+    else {
+        float t = (c - cosOuter_) / std::max(cosInner_ - cosOuter_, 1e-6f);
+        falloff = t * t * (3.f - 2.f * t);  // smoothstep edge
+    }
+    if (falloff <= 0.f) return false;
+    s.L = I_ * (falloff / d2);
+    s.pdf = 1.f;
+    s.delta = true;
+    return true;
+}
+
+bool DirectionalLight::sample(const Vec3&, const Vec2&, LightSample& s) const {
+    s.wi = toLight_;
+    s.distance = std::numeric_limits<float>::infinity();
+    s.L = E_;
+    s.pdf = 1.f;
+    s.delta = true;
+    return true;
+}
+
+QuadLight::QuadLight(const Vec3& corner, const Vec3& edgeU, const Vec3& edgeV, const Color3& radiance, bool twoSided)
+    : corner_(corner), eu_(edgeU), ev_(edgeV), L_(radiance), twoSided_(twoSided) {
+    Vec3 c = glm::cross(eu_, ev_);
+    area_ = glm::length(c);
+    n_ = area_ > 0.f ? c / area_ : Vec3(0, 0, 1);
+}
+
+bool QuadLight::sample(const Vec3& p, const Vec2& u, LightSample& s) const {
+    // Uniform area sampling, converted to solid angle: pdf = d² / (A |cos θl|).
+    Vec3 q = corner_ + u.x * eu_ + u.y * ev_;
+    Vec3 d = q - p;
+    float d2 = glm::dot(d, d);
+    if (d2 <= 0.f || area_ <= 0.f) return false;
+    s.distance = std::sqrt(d2);
+    s.wi = d / s.distance;
+    float cosL = -glm::dot(s.wi, n_);
+    if (!twoSided_ && cosL <= 0.f) return false;
+    cosL = std::abs(cosL);
+    if (cosL <= 1e-7f) return false;
+    s.pdf = d2 / (area_ * cosL);
+    s.L = L_;
+    s.delta = false;
+    return true;
+}
+
+float QuadLight::pdf(const Vec3& p, const Vec3& wi, float t) const {
+    float cosL = -glm::dot(wi, n_);
+    if (!twoSided_ && cosL <= 0.f) return 0.f;
+    cosL = std::abs(cosL);
+    if (cosL <= 1e-7f || area_ <= 0.f) return 0.f;
+    return t * t / (area_ * cosL);
+}
+
+Color3 QuadLight::radiance(const Vec3& wi, bool) const {
+    float cosL = -glm::dot(wi, n_);
+    return (twoSided_ || cosL > 0.f) ? L_ : Color3(0.f);
+}
+
+int QuadLight::polygon(Vec3* v) const {
+    v[0] = corner_;
+    v[1] = corner_ + eu_;
+    v[2] = corner_ + eu_ + ev_;
+    v[3] = corner_ + ev_;
+    return 4;
+}
+
+EnvironmentLight::EnvironmentLight(const Color3& radiance) : constant_(radiance) {}
+
+EnvironmentLight::EnvironmentLight(std::vector<float> rgb, int width, int height, float rotationDegrees,
+                                   const Color3& scale)
+    : rgb_(std::move(rgb)), w_(width), h_(height), rotation_(glm::radians(rotationDegrees)), scale_(scale) {
+    // Importance ∝ luminance · sin θ (the Jacobian of the lat-long mapping).
+    std::vector<float> f(size_t(w_) * h_);
+    for (int y = 0; y < h_; ++y) {
+        float sinTheta = std::sin(kPi * (y + 0.5f) / h_);
+        for (int x = 0; x < w_; ++x) {
+            const float* px = &rgb_[(size_t(y) * w_ + x) * 3];
+            f[size_t(y) * w_ + x] = std::max(0.f, luminance({px[0], px[1], px[2]})) * sinTheta;
+        }
+    }
+    dist_ = Distribution2D(f, w_, h_);
+}
+
+Vec2 EnvironmentLight::dirToUv(const Vec3& d) const {
+    float phi = std::atan2(d.y, d.x) - rotation_;
+    float u = 0.5f + phi * kInv2Pi;
+    u -= std::floor(u);
+    float v = std::acos(std::clamp(d.z, -1.f, 1.f)) * kInvPi;  // v = 0 at +z (top row)
+    return {u, v};
+}
+
+Vec3 EnvironmentLight::uvToDir(const Vec2& uv) const {
+    float phi = (uv.x - 0.5f) * 2.f * kPi + rotation_;
+    float theta = uv.y * kPi;
+    float st = std::sin(theta);
+    return {st * std::cos(phi), st * std::sin(phi), std::cos(theta)};
+}
+
+Color3 EnvironmentLight::lookup(const Vec2& uv) const {
+    int x = std::clamp(int(uv.x * w_), 0, w_ - 1);
+    int y = std::clamp(int(uv.y * h_), 0, h_ - 1);
+    const float* px = &rgb_[(size_t(y) * w_ + x) * 3];
+    return Color3(px[0], px[1], px[2]) * scale_;
+}
+
+bool EnvironmentLight::sample(const Vec3&, const Vec2& u, LightSample& s) const {
+    s.distance = std::numeric_limits<float>::infinity();
+    s.delta = false;
+    if (rgb_.empty()) {
+        s.wi = sampleUniformSphere(u);
+        s.pdf = kInv4Pi;
+        s.L = constant_;
+        return true;
+    }
+    float pdfUv;
+    Vec2 uv = dist_.sample(u, pdfUv);
+    float sinTheta = std::sin(uv.y * kPi);
+    if (pdfUv <= 0.f || sinTheta <= 0.f) return false;
+    s.wi = uvToDir(uv);
+    s.pdf = pdfUv / (2.f * kPi * kPi * sinTheta);
+    s.L = lookup(uv);
+    return true;
+}
+
+float EnvironmentLight::pdf(const Vec3&, const Vec3& wi, float) const {
+    if (rgb_.empty()) return kInv4Pi;
+    Vec2 uv = dirToUv(wi);
+    float sinTheta = std::sin(uv.y * kPi);
+    if (sinTheta <= 0.f) return 0.f;
+    return dist_.pdf(uv) / (2.f * kPi * kPi * sinTheta);
+}
+
+Color3 EnvironmentLight::radiance(const Vec3& wi, bool) const {
+    if (rgb_.empty()) return constant_;
+    return lookup(dirToUv(wi));
+}
+
+}  // namespace specula

@@ -1,0 +1,119 @@
+// Light sources: point, spot, directional (delta lights), one-sided quad area lights (also hit by
+// rays, with a polygon hook for analytic integration) and constant / image environment lights.
+#pragma once
+
+#include "core/render/distribution.h"
+#include "core/render/ray.h"
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace specula {
+
+struct LightSample {
+    Vec3 wi{0.f};       // unit direction from the shading point towards the light
+    float distance = 0.f;  // distance to the sampled point (infinity for directional/environment)
+    Color3 L{0.f};      // incident radiance (delta lights: intensity/d² or irradiance, with pdf = 1)
+    float pdf = 0.f;    // solid-angle pdf; 1 for delta lights
+    bool delta = false;
+};
+
+class Light {
+public:
+    virtual ~Light() = default;
+    virtual bool sample(const Vec3& p, const Vec2& u, LightSample& s) const = 0;
+    // Solid-angle pdf that sample() would produce wi from p, given the ray hit the light at distance t
+    // (area lights) or escaped (environment). Delta lights: 0.
+    virtual float pdf(const Vec3& p, const Vec3& wi, float t) const { return 0.f; }
+    // Radiance leaving the light towards -wi when a ray from p in direction wi hits it (area) or escapes (env).
+    virtual Color3 radiance(const Vec3& wi, bool frontSide = true) const { return Color3(0.f); }
+    virtual bool isDelta() const { return false; }
+    virtual bool isEnvironment() const { return false; }
+    // Area lights: the emitting polygon (world space, counter-clockwise seen from the lit side).
+    virtual int polygon(Vec3* vertices) const { return 0; }
+    std::string name;
+};
+
+class PointLight final : public Light {
+public:
+    PointLight(const Vec3& p, const Color3& intensity) : p_(p), I_(intensity) {}
+    bool sample(const Vec3& p, const Vec2& u, LightSample& s) const override;
+    bool isDelta() const override { return true; }
+
+private:
+    Vec3 p_;
+    Color3 I_;  // W/sr
+};
+
+class SpotLight final : public Light {
+public:
+    // Full cone angle in degrees; blend in [0,1] softens the edge (Blender's spot_blend).
+    SpotLight(const Vec3& p, const Vec3& dir, float coneDegrees, float blend, const Color3& intensity);
+    bool sample(const Vec3& p, const Vec2& u, LightSample& s) const override;
+    bool isDelta() const override { return true; }
+
+private:
+    Vec3 p_, dir_;
+    float cosOuter_, cosInner_;
+    Color3 I_;
+};
+
+class DirectionalLight final : public Light {
+public:
+    DirectionalLight(const Vec3& direction, const Color3& irradiance)
+        : toLight_(-glm::normalize(direction)), E_(irradiance) {}
+    bool sample(const Vec3& p, const Vec2& u, LightSample& s) const override;
+    bool isDelta() const override { return true; }
+
+private:
+    Vec3 toLight_;
+    Color3 E_;  // W/m² perpendicular to the direction
+};
+
+class QuadLight final : public Light {
+public:
+    // Parallelogram corner + edge vectors; emits on the side of cross(edgeU, edgeV) (or both).
+    QuadLight(const Vec3& corner, const Vec3& edgeU, const Vec3& edgeV, const Color3& radiance, bool twoSided);
+    bool sample(const Vec3& p, const Vec2& u, LightSample& s) const override;
+    float pdf(const Vec3& p, const Vec3& wi, float t) const override;
+    Color3 radiance(const Vec3& wi, bool frontSide) const override;
+    int polygon(Vec3* vertices) const override;
+    const Vec3& corner() const { return corner_; }
+    const Vec3& edgeU() const { return eu_; }
+    const Vec3& edgeV() const { return ev_; }
+    const Vec3& normal() const { return n_; }
+    float area() const { return area_; }
+
+private:
+    Vec3 corner_, eu_, ev_, n_;
+    float area_;
+    Color3 L_;
+    bool twoSided_;
+};
+
+class EnvironmentLight final : public Light {
+public:
+    // Constant environment.
+    explicit EnvironmentLight(const Color3& radiance);
+    // Equirectangular (lat-long) image, rows top to bottom, 3 floats/pixel, z-up: the top row is +z,
+    // u = 0.5 + atan2(dy, dx)/(2π) after rotating by -rotationDegrees about z; scaled by 'scale'.
+    EnvironmentLight(std::vector<float> rgb, int width, int height, float rotationDegrees, const Color3& scale);
+    bool sample(const Vec3& p, const Vec2& u, LightSample& s) const override;
+    float pdf(const Vec3& p, const Vec3& wi, float t) const override;
+    Color3 radiance(const Vec3& wi, bool frontSide) const override;
+    bool isEnvironment() const override { return true; }
+
+private:
+    Vec2 dirToUv(const Vec3& d) const;
+    Vec3 uvToDir(const Vec2& uv) const;
+    Color3 lookup(const Vec2& uv) const;
+    Color3 constant_{0.f};
+    std::vector<float> rgb_;
+    int w_ = 0, h_ = 0;
+    float rotation_ = 0.f;  // radians
+    Color3 scale_{1.f};
+    Distribution2D dist_;
+};
+
+}  // namespace specula

@@ -1,0 +1,30 @@
+// Rays with optional differentials (offset rays one pixel step in x and y, pbrt-style).
+#pragma once
+
+#include "core/math/math.h"
+
+#include <limits>
+
+namespace specula {
+
+struct Ray {
+    Vec3 o{0.f}, d{0, 0, 1};
+    float tMin = 0.f;
+    float tMax = std::numeric_limits<float>::infinity();
+};
+
+struct RayDifferential : Ray {
+    bool hasDifferentials = false;
+    Vec3 rxOrigin{0.f}, ryOrigin{0.f};
+    Vec3 rxDirection{0.f}, ryDirection{0.f};
+
+    // Shrinks the differentials to the footprint of one of several samples per pixel.
+    void scaleDifferentials(float s) {
+        rxOrigin = o + (rxOrigin - o) * s;
+        ryOrigin = o + (ryOrigin - o) * s;
+        rxDirection = d + (rxDirection - d) * s;
+        ryDirection = d + (ryDirection - d) * s;
+    }
+};
+
+}  // namespace specula

@@ -1,0 +1,185 @@
+// Tile scheduler and film. Each pixel averages its own samples (filter importance sampling: offsets
+// are drawn from the pixel filter, so every sample has weight 1 and no splatting crosses tiles);
+// hence the image does not depend on the number of threads or the tile completion order.
+#include "core/render/renderer.h"
+
+#include "core/render/accel.h"
+#include "core/render/camera.h"
+#include "core/render/integrator.h"
+#include "core/scene/scene.h"
+
+#include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <chrono>
+#include <mutex>
+
+namespace specula {
+
+namespace {
+
+// Pixel-filter importance sampling: offset from the pixel centre, in pixels.
+Vec2 filterOffset(const RenderSettings& rs, const Vec2& u) {
+    if (rs.pixelCenter && rs.spp == 1) return Vec2(0.f);
+    if (rs.filter == PixelFilterKind::Box) return u - Vec2(0.5f);
+    // Gaussian: Box-Muller with σ = sqrt(σ²); untruncated, so the estimator is the exact Gaussian filter.
+    float sigma = std::sqrt(rs.gaussianSigma2);
+    float r = sigma * std::sqrt(-2.f * std::log(std::max(1.f - u.x, 1e-12f)));
+    float phi = 2.f * kPi * u.y;
+    return {r * std::cos(phi), r * std::sin(phi)};
+}
+
+struct Accum {
+    Color3 beauty{0.f}, diffuse{0.f}, specular{0.f}, albedo{0.f};
+    Vec3 normal{0.f};
+    Vec2 uv{0.f};
+    double depth = 0;
+    int n = 0;
+};
+
+bool finiteSample(const SampleValue& v) {
+    return isFinite(v.beauty) && isFinite(v.diffuse) && isFinite(v.specular) && isFinite(v.albedo) &&
+           isFinite(v.normal) && std::isfinite(v.uv.x) && std::isfinite(v.uv.y) && std::isfinite(v.depth);
+}
+
+}  // namespace
+
+RenderOutput renderScene(const Scene& scene, const RenderOptions& options) {
+    using Clock = std::chrono::steady_clock;
+    const auto start = Clock::now();
+    const RenderSettings& rs = scene.render;
+    CropWindow crop{0, 0, rs.width, rs.height};
+    if (rs.crop) crop = *rs.crop;
+    const int W = crop.x1 - crop.x0, H = crop.y1 - crop.y0;
+
+    RenderOutput out;
+    ImageSet& img = out.images;
+    img.width = W;
+    img.height = H;
+    auto addAov = [&](const char* name, std::vector<std::string> ch) {
+        AovBuffer b;
+        b.name = name;
+        b.channelNames = std::move(ch);
+        b.pixels.assign(size_t(W) * H * b.channelNames.size(), 0.f);
+        img.aovs.push_back(std::move(b));
+        return &img.aovs.back();
+    };
+    img.aovs.reserve(7);
+    AovBuffer* beauty = addAov("beauty", {"R", "G", "B"});
+    AovBuffer* diffuse = addAov("diffuse", {"R", "G", "B"});
+    AovBuffer* specular = addAov("specular", {"R", "G", "B"});
+    AovBuffer* albedo = addAov("albedo", {"R", "G", "B"});
+    AovBuffer* normal = addAov("normal", {"X", "Y", "Z"});
+    AovBuffer* uvAov = addAov("uv", {"U", "V"});
+    AovBuffer* depthAov = addAov("depth", {"Z"});
+
+    Accel accel(scene);
+    PerspectiveCamera camera(scene.camera, rs.width, rs.height);
+    Integrator integrator(scene, accel);
+    const float diffScale = std::max(0.125f, 1.f / std::sqrt(float(rs.spp)));
+
+    const int tile = std::max(1, rs.tile);
+    const int tilesX = (W + tile - 1) / tile, tilesY = (H + tile - 1) / tile;
+    const int tileCount = tilesX * tilesY;
+    std::atomic<int> tilesDone{0};
+    std::atomic<uint64_t> samples{0}, invalid{0};
+    std::atomic<bool> cancelled{false};
+    std::mutex progressMutex;
+
+    auto renderTile = [&](int t) {
+        if (cancelled.load() || (options.cancel && options.cancel->load())) {
+            cancelled = true;
+            return;
+        }
+        const int tx0 = crop.x0 + (t % tilesX) * tile, ty0 = crop.y0 + (t / tilesX) * tile;
+        const int tx1 = std::min(tx0 + tile, crop.x1), ty1 = std::min(ty0 + tile, crop.y1);
+        ScratchArena arena;
+        uint64_t tileSamples = 0, tileInvalid = 0;
+        for (int y = ty0; y < ty1; ++y) {
+            if (options.cancel && options.cancel->load()) {
+                cancelled = true;
+                return;  // tile stays partially rendered; counted as not done
+            }
+            for (int x = tx0; x < tx1; ++x) {
+                Accum acc;
+                for (int s = 0; s < rs.spp; ++s) {
+                    PixelSampler sampler(uint32_t(x), uint32_t(y), uint32_t(s), rs.seed);
+                    Vec2 off = filterOffset(rs, sampler.get2D());
+                    Vec2 uLens = sampler.get2D();
+                    RayDifferential ray = camera.generateRay(x + 0.5f + off.x, y + 0.5f + off.y, uLens);
+                    ray.scaleDifferentials(diffScale);
+                    SampleValue v = integrator.li(ray, sampler, arena);
+                    ++tileSamples;
+                    if (!finiteSample(v)) {
+                        ++tileInvalid;
+                        continue;
+                    }
+                    acc.beauty += v.beauty;
+                    acc.diffuse += v.diffuse;
+                    acc.specular += v.specular;
+                    acc.albedo += v.albedo;
+                    acc.normal += v.normal;
+                    acc.uv += v.uv;
+                    acc.depth += v.depth;
+                    ++acc.n;
+                }
+                const size_t pix = size_t(y - crop.y0) * W + (x - crop.x0);
+                if (acc.n > 0) {
+                    const float inv = 1.f / float(acc.n);
+                    auto put3 = [&](AovBuffer* b, const Vec3& c) {
+                        b->pixels[pix * 3 + 0] = c.x;
+                        b->pixels[pix * 3 + 1] = c.y;
+                        b->pixels[pix * 3 + 2] = c.z;
+                    };
+                    put3(beauty, acc.beauty * inv);
+                    put3(diffuse, acc.diffuse * inv);
+                    put3(specular, acc.specular * inv);
+                    put3(albedo, acc.albedo * inv);
+                    put3(normal, acc.normal * inv);
+                    uvAov->pixels[pix * 2 + 0] = acc.uv.x * inv;
+                    uvAov->pixels[pix * 2 + 1] = acc.uv.y * inv;
+                    depthAov->pixels[pix] = float(acc.depth * inv);
+                }
+            }
+        }
+        samples += tileSamples;
+        invalid += tileInvalid;
+        int done = ++tilesDone;
+        if (options.onTile) {
+            std::lock_guard<std::mutex> lock(progressMutex);
+            RenderProgress p;
+            p.tilesDone = done;
+            p.tilesTotal = tileCount;
+            p.tileX0 = tx0;
+            p.tileY0 = ty0;
+            p.tileX1 = tx1;
+            p.tileY1 = ty1;
+            p.elapsedSeconds = std::chrono::duration<double>(Clock::now() - start).count();
+            p.samplesPerSecond = p.elapsedSeconds > 0 ? double(samples.load()) / p.elapsedSeconds : 0.0;
+            p.etaSeconds = done > 0 ? p.elapsedSeconds * (tileCount - done) / done : 0.0;
+            options.onTile(p);
+        }
+    };
+
+    const int threads = options.threads > 0 ? options.threads : tbb::this_task_arena::max_concurrency();
+    tbb::task_arena arena(threads);
+    arena.execute([&] {
+        tbb::parallel_for(tbb::blocked_range<int>(0, tileCount, 1), [&](const tbb::blocked_range<int>& r) {
+            for (int t = r.begin(); t != r.end(); ++t) renderTile(t);
+        });
+    });
+
+    out.stats.samples = samples.load();
+    out.stats.invalidSamples = invalid.load();
+    out.stats.tilesDone = tilesDone.load();
+    out.stats.tilesTotal = tileCount;
+    out.stats.cancelled = cancelled.load();
+    out.stats.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+    img.metadata["specula:spp"] = std::to_string(rs.spp);
+    img.metadata["specula:seed"] = std::to_string(rs.seed);
+    img.metadata["specula:version"] = SPECULA_VERSION;
+    return out;
+}
+
+}  // namespace specula

@@ -1,0 +1,45 @@
+// Tile-based parallel rendering (TBB) of a Scene into AOV buffers, with per-tile progress callbacks,
+// cooperative cancellation, NaN/Inf accounting and a thread-count-independent result.
+#pragma once
+
+#include "core/io/image_io.h"
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+
+namespace specula {
+
+struct Scene;
+
+struct RenderProgress {
+    int tilesDone = 0, tilesTotal = 0;
+    int tileX0 = 0, tileY0 = 0, tileX1 = 0, tileY1 = 0;  // the tile just finished
+    double elapsedSeconds = 0;
+    double samplesPerSecond = 0;
+    double etaSeconds = 0;
+};
+
+struct RenderStats {
+    uint64_t samples = 0;         // camera samples taken
+    uint64_t invalidSamples = 0;  // NaN/Inf samples (counted, never accumulated)
+    double seconds = 0;
+    int tilesDone = 0, tilesTotal = 0;
+    bool cancelled = false;
+};
+
+struct RenderOptions {
+    int threads = 0;  // 0 = all cores
+    std::function<void(const RenderProgress&)> onTile;  // called serially, after each finished tile
+    const std::atomic<bool>* cancel = nullptr;          // polled between pixel rows
+};
+
+struct RenderOutput {
+    ImageSet images;  // beauty, diffuse, specular, albedo, normal, uv, depth
+    RenderStats stats;
+};
+
+// Renders scene.render.crop (or the whole frame). Pixels of tiles not finished after a cancel are 0.
+RenderOutput renderScene(const Scene& scene, const RenderOptions& options = {});
+
+}  // namespace specula

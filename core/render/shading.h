@@ -1,0 +1,38 @@
+// The shading point handed to materials: hit geometry, shading frame and the screen-space
+// differentials (dp, duv, dn, dwo per pixel step) propagated from camera ray differentials.
+#pragma once
+
+#include "core/math/math.h"
+
+#include <cstdint>
+
+namespace specula {
+
+struct ShadingPoint {
+    // Geometry (world space).
+    Vec3 p{0.f};           // shading position (on the exact surface for analytic shapes)
+    Vec3 pGeom{0.f};       // hit on the tessellation: origin for spawned rays (offset along ng)
+    Vec3 ng{0, 0, 1};      // geometric normal, facing the incoming ray's side
+    Vec3 n{0, 0, 1};       // interpolated (or exact) shading normal, same side as ng
+    Vec2 uv{0.f};          // surface parameters / texture coordinates
+    Vec3 dpdu{1, 0, 0}, dpdv{0, 1, 0};  // position partials (world)
+    Vec3 dndu{0.f}, dndv{0.f};          // shading-normal partials (world)
+    Vec4 tangent{1, 0, 0, 1};           // mesh tangent (xyz world, w = bitangent sign); from dpdu if absent
+    Frame frame;                        // shading frame: n, tangent along dpdu; materials may perturb it
+
+    Vec3 wo{0, 0, 1};      // direction towards the viewer / previous vertex (world, unit)
+
+    // Screen-space differentials: change per pixel step in x and y (scaled for spp as pbrt does).
+    bool hasDifferentials = false;
+    Vec3 dpdx{0.f}, dpdy{0.f};
+    Vec2 duvdx{0.f}, duvdy{0.f};
+    Vec3 dndx{0.f}, dndy{0.f};
+    Vec3 dwodx{0.f}, dwody{0.f};  // derivative of wo (world)
+
+    int depth = 0;          // 0 at the camera hit
+    uint32_t shapeId = 0;   // index of the shape in the scene
+    uint32_t primId = 0;    // triangle index
+    bool frontFacing = true;  // the ray hit the side the geometric normal points to
+};
+
+}  // namespace specula

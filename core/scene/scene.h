@@ -1,0 +1,73 @@
+// The in-memory scene the renderer consumes: render settings, camera, world-space shapes with their
+// materials, lights, colour settings and the shared texture store. Built by the JSON loader.
+#pragma once
+
+#include "core/geometry/mesh.h"
+#include "core/render/camera.h"
+#include "core/render/lights.h"
+#include "core/render/material.h"
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace specula {
+
+class ColorConfig;
+class TextureStore;
+
+enum class IntegratorKind { Direct, Path };
+enum class PixelFilterKind { Box, Gaussian };
+
+struct CropWindow {
+    int x0 = 0, y0 = 0, x1 = 0, y1 = 0;  // pixel bounds, [x0,x1) x [y0,y1)
+};
+
+struct RenderSettings {
+    int width = 640, height = 480;
+    int spp = 16;
+    uint64_t seed = 0;
+    int tile = 32;
+    IntegratorKind integrator = IntegratorKind::Path;
+    int maxDepth = 8;          // path vertices after the camera hit (path tracer)
+    PixelFilterKind filter = PixelFilterKind::Box;
+    float gaussianSigma2 = 1.f / (2.f * kPi);  // σ² of the Gaussian filter in pixel² (T&K 2021 reference)
+    bool pixelCenter = false;  // spp = 1 samples the pixel centre (validation.md §1)
+    std::optional<CropWindow> crop;
+};
+
+struct ColorSettings {
+    std::string config = "builtin";
+    std::string view;            // empty = the config's default view
+    float exposure = 0.f;        // stops, applied before the view transform (PNG only)
+};
+
+struct ShapeInstance {
+    std::string name;
+    TriangleMesh mesh;  // world space
+    std::shared_ptr<const AnalyticSurface> surface;  // object-space exact surface, or null
+    Mat4 objectToWorld{1.f}, worldToObject{1.f};
+    Mat3 normalToWorld{1.f};   // inverse transpose of the linear part
+    int material = -1;         // index into Scene::materials; -1 for light geometry
+    int areaLight = -1;        // index into Scene::lights for emitting quads
+};
+
+struct Scene {
+    std::string sourcePath;  // the JSON file, for messages
+    RenderSettings render;
+    ColorSettings color;
+    CameraDesc camera;
+    std::vector<ShapeInstance> shapes;
+    std::vector<std::shared_ptr<Material>> materials;
+    std::vector<std::unique_ptr<Light>> lights;
+    std::shared_ptr<const ColorConfig> colorConfig;
+    std::shared_ptr<TextureStore> textures;
+
+    Scene();
+    ~Scene();
+    Scene(Scene&&) noexcept;
+    Scene& operator=(Scene&&) noexcept;
+};
+
+}  // namespace specula

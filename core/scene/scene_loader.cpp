@@ -1,0 +1,500 @@
+// Scene format v1 loader: strict JSON -> Scene (render settings, camera, textures, materials, shapes,
+// lights), with every input error reported at its JSON pointer.
+#include "core/scene/scene_loader.h"
+
+#include "core/color/color_config.h"
+#include "core/geometry/mesh_io.h"
+#include "core/geometry/shapes.h"
+#include "core/scene/builtin_materials.h"
+#include "core/scene/json_reader.h"
+#include "core/texture/texture_store.h"
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+namespace fs = std::filesystem;
+
+namespace specula {
+
+Scene::Scene() = default;
+Scene::~Scene() = default;
+Scene::Scene(Scene&&) noexcept = default;
+Scene& Scene::operator=(Scene&&) noexcept = default;
+
+namespace {
+
+constexpr int kMaxDimension = 16384;
+constexpr int64_t kMaxPixels = int64_t(1) << 26;  // 64 Mpixel
+constexpr float kBig = 1e7f;
+
+struct Context {
+    std::string baseDir;
+    Scene* scene = nullptr;
+    std::map<std::string, TextureHandle> textures;
+    std::map<std::string, int> materials;
+};
+
+std::string resolvePath(const Context& ctx, const std::string& p) {
+    fs::path path(p);
+    if (path.is_relative()) path = fs::path(ctx.baseDir) / path;
+    return path.lexically_normal().string();
+}
+
+std::string fileMustExist(const Context& ctx, const JsonReader& r, const std::string& key) {
+    std::string file = r.requiredString(key);
+    std::string full = resolvePath(ctx, file);
+    if (!fs::exists(full)) r.fail(key, "file not found: '" + full + "'");
+    return full;
+}
+
+void readRender(const Json& j, Scene& s) {
+    JsonReader r(j, "/render",
+                 {"width", "height", "spp", "seed", "tile", "integrator", "max_depth", "filter", "gaussian_sigma2",
+                  "pixel_center"});
+    RenderSettings& rs = s.render;
+    rs.width = r.integer("width", rs.width, 1, kMaxDimension);
+    rs.height = r.integer("height", rs.height, 1, kMaxDimension);
+    rs.spp = r.integer("spp", rs.spp, 1, 1 << 20);
+    rs.seed = uint64_t(r.integer("seed", 0, 0, 2147483647));
+    rs.tile = r.integer("tile", rs.tile, 1, 1024);
+    rs.integrator = r.enumeration("integrator", "path", {"path", "direct"}) == "path" ? IntegratorKind::Path
+                                                                                     : IntegratorKind::Direct;
+    rs.maxDepth = r.integer("max_depth", rs.maxDepth, 0, 1024);
+    rs.filter = r.enumeration("filter", "box", {"box", "gaussian"}) == "box" ? PixelFilterKind::Box
+                                                                           : PixelFilterKind::Gaussian;
+    rs.gaussianSigma2 = r.number("gaussian_sigma2", rs.gaussianSigma2, 1e-4f, 16.f);
+    rs.pixelCenter = r.boolean("pixel_center", false);
+    if (int64_t(rs.width) * rs.height > kMaxPixels)
+        r.fail("width", "image of " + std::to_string(rs.width) + "x" + std::to_string(rs.height) +
+                            " pixels exceeds the limit of " + std::to_string(kMaxPixels) + " pixels");
+}
+
+void readColor(const Json& j, Scene& s) {
+    JsonReader r(j, "/color", {"config", "view", "exposure"});
+    s.color.config = r.string("config", "builtin");
+    s.color.view = r.string("view", "");
+    s.color.exposure = r.number("exposure", 0.f, -30.f, 30.f);
+}
+
+void readCamera(const Json& j, Scene& s) {
+    JsonReader r(j, "/camera",
+                 {"type", "position", "look_at", "up", "fov", "fov_axis", "aperture_radius", "focus_distance"});
+    r.enumeration("type", "perspective", {"perspective"});
+    CameraDesc& c = s.camera;
+    c.position = r.requiredVec3("position");
+    c.lookAt = r.requiredVec3("look_at");
+    c.up = r.vec3("up", Vec3(0, 0, 1));
+    c.fovDegrees = r.number("fov", 39.6f, 0.01f, 179.f);
+    c.fovIsHorizontal = r.enumeration("fov_axis", "x", {"x", "y"}) == "x";
+    c.apertureRadius = r.number("aperture_radius", 0.f, 0.f, kBig);
+    c.focusDistance = r.number("focus_distance", 0.f, 0.f, kBig);
+    Vec3 fwd = c.lookAt - c.position;
+    if (glm::length(fwd) < 1e-9f) r.fail("look_at", "look_at equals position");
+    if (glm::length(glm::cross(glm::normalize(fwd), c.up)) < 1e-6f) r.fail("up", "up is parallel to the view direction");
+}
+
+Mat4 readTransform(const JsonReader& parent) {
+    if (!parent.has("transform")) return Mat4(1.f);
+    JsonReader r(parent.at("transform"), parent.pointer("transform"), {"translate", "rotate", "scale", "matrix"});
+    if (r.has("matrix")) {
+        if (r.has("translate") || r.has("rotate") || r.has("scale"))
+            r.fail("matrix", "'matrix' cannot be combined with translate/rotate/scale");
+        auto m = r.numbers("matrix", 16, {}, -1e30f, 1e30f);
+        Mat4 M;
+        for (int row = 0; row < 4; ++row)
+            for (int col = 0; col < 4; ++col) M[col][row] = m[size_t(row) * 4 + col];  // row-major in JSON
+        if (std::abs(glm::determinant(M)) < 1e-12f) r.fail("matrix", "matrix is singular");
+        return M;
+    }
+    auto sc = r.numbers("scale", 3, {1, 1, 1}, -kBig, kBig);
+    for (int i = 0; i < 3; ++i)
+        if (std::abs(sc[i]) < 1e-9f) r.fail("scale", "scale must be non-zero");
+    Vec3 rot = r.vec3("rotate", Vec3(0.f));
+    Vec3 tr = r.vec3("translate", Vec3(0.f));
+    // T · Rz · Ry · Rx · S (Euler XYZ in degrees, as Blender's default rotation mode)
+    Mat4 M = glm::translate(Mat4(1.f), tr);
+    M = glm::rotate(M, glm::radians(rot.z), Vec3(0, 0, 1));
+    M = glm::rotate(M, glm::radians(rot.y), Vec3(0, 1, 0));
+    M = glm::rotate(M, glm::radians(rot.x), Vec3(1, 0, 0));
+    M = glm::scale(M, Vec3(sc[0], sc[1], sc[2]));
+    return M;
+}
+
+void transformMesh(ShapeInstance& sh, const Mat4& M) {
+    sh.objectToWorld = M;
+    sh.worldToObject = glm::inverse(M);
+    sh.normalToWorld = glm::transpose(glm::inverse(Mat3(M)));
+    Mat3 lin(M);
+    for (auto& p : sh.mesh.positions) p = Vec3(M * Vec4(p, 1.f));
+    for (auto& n : sh.mesh.normals) n = glm::normalize(sh.normalToWorld * n);
+    for (auto& t : sh.mesh.tangents) {
+        Vec3 tw = glm::normalize(lin * Vec3(t));
+        t = Vec4(tw, t.w * (glm::determinant(lin) < 0.f ? -1.f : 1.f));
+    }
+    if (glm::determinant(lin) < 0.f)  // mirrored: keep counter-clockwise winding w.r.t. the normals
+        for (auto& i : sh.mesh.indices) std::swap(i.y, i.z);
+}
+
+void readTextures(const Json& j, Context& ctx) {
+    if (!j.is_object()) throw InputError("/textures", "expected an object mapping names to textures, got " + jsonTypeName(j));
+    for (auto it = j.begin(); it != j.end(); ++it) {
+        std::string ptr = "/textures/" + pointerEscape(it.key());
+        JsonReader r(it.value(), ptr, {"file", "colorspace"});
+        std::string file = fileMustExist(ctx, r, "file");
+        r.require("colorspace");  // explicit by design (architecture.md §8.7)
+        std::string cs = r.string("colorspace", "");
+        if (cs != "raw" && !ctx.scene->colorConfig->hasColorspace(cs)) {
+            auto names = ctx.scene->colorConfig->colorspaces();
+            names.push_back("raw");
+            r.fail("colorspace", "unknown colorspace '" + cs + "'", nearestName(cs, names));
+        }
+        try {
+            ctx.textures[it.key()] = ctx.scene->textures->load(file, cs);
+        } catch (const TextureError& e) {
+            throw IoError(std::string(ptr + "/file: ") + e.what());
+        }
+    }
+}
+
+int materialIndex(const Context& ctx, const JsonReader& r, const std::string& key) {
+    std::string name;
+    const Json& v = r.at(key);
+    std::string ptr = r.pointer(key);
+    if (v.is_string()) {
+        name = v.get<std::string>();
+    } else if (v.is_object()) {
+        JsonReader ref(v, ptr, {"ref"});
+        name = ref.requiredString("ref");
+        ptr += "/ref";
+    } else {
+        throw InputError(ptr, "expected a material name or {\"ref\": name}, got " + jsonTypeName(v));
+    }
+    auto it = ctx.materials.find(name);
+    if (it == ctx.materials.end()) {
+        std::vector<std::string> names;
+        for (auto& m : ctx.materials) names.push_back(m.first);
+        throw InputError(ptr, "unknown material '" + name + "'", nearestName(name, names));
+    }
+    return it->second;
+}
+
+std::shared_ptr<Material> readMaterial(const Json& j, const std::string& ptr, Context& ctx) {
+    if (!j.is_object()) throw InputError(ptr, "expected an object, got " + jsonTypeName(j));
+    if (!j.contains("type")) throw InputError(ptr, "missing required key 'type'");
+    const std::vector<std::string> types = {"diffuse", "ggx", "emission"};
+    std::string type = j.at("type").is_string() ? j.at("type").get<std::string>() : "";
+    if (type == "diffuse") {
+        JsonReader r(j, ptr, {"type", "color", "texture"});
+        Color3 c = r.color("color", Color3(0.8f));
+        if (maxComponent(c) > 1.f) r.fail("color", "diffuse albedo above 1 is not energy conserving");
+        TextureHandle tex;
+        if (r.has("texture")) {
+            std::string name = r.string("texture", "");
+            auto it = ctx.textures.find(name);
+            if (it == ctx.textures.end()) {
+                std::vector<std::string> names;
+                for (auto& t : ctx.textures) names.push_back(t.first);
+                r.fail("texture", "unknown texture '" + name + "'", nearestName(name, names));
+            }
+            tex = it->second;
+        }
+        return std::make_shared<DiffuseMaterial>(c, ctx.scene->textures.get(), tex);
+    }
+    if (type == "ggx") {
+        JsonReader r(j, ptr, {"type", "color", "roughness", "alpha", "anisotropy", "fresnel", "eta", "k", "ior"});
+        if (r.has("roughness") && r.has("alpha")) r.fail("alpha", "give either 'roughness' or 'alpha', not both");
+        float alpha = r.has("alpha") ? r.number("alpha", 0.1f, 0.f, 1.f) : sqr(r.number("roughness", 0.3f, 0.f, 1.f));
+        float aniso = r.number("anisotropy", 0.f, -0.99f, 0.99f);
+        // Kulla-Conty style anisotropy mapping: aspect = sqrt(1 - 0.9 |a|).
+        float aspect = std::sqrt(1.f - 0.9f * std::abs(aniso));
+        float ax = aniso >= 0.f ? alpha / aspect : alpha * aspect;
+        float ay = aniso >= 0.f ? alpha * aspect : alpha / aspect;
+        std::string fr = r.enumeration("fresnel", "schlick", {"schlick", "conductor", "dielectric", "none"});
+        Fresnel f;
+        if (fr == "schlick")
+            f = Fresnel::schlick(r.color("color", Color3(0.9f)));
+        else if (fr == "conductor")
+            f = Fresnel::conductor(r.color("eta", Color3(0.2f, 0.92f, 1.1f)), r.color("k", Color3(3.9f, 2.45f, 2.14f)));
+        else if (fr == "dielectric")
+            f = Fresnel::dielectric(r.number("ior", 1.5f, 1.f, 4.f));
+        return std::make_shared<GgxMaterial>(ax, ay, f);
+    }
+    if (type == "emission") {
+        JsonReader r(j, ptr, {"type", "color", "strength"});
+        return std::make_shared<EmissionMaterial>(r.color("color", Color3(1.f)) * r.number("strength", 1.f, 0.f, 1e9f));
+    }
+    throw InputError(ptr + "/type", "unknown material type '" + j.at("type").dump() + "'; valid types: diffuse, ggx, emission",
+                     nearestName(type, types));
+}
+
+void readMaterials(const Json& j, Context& ctx) {
+    if (!j.is_object()) throw InputError("/materials", "expected an object mapping names to materials, got " + jsonTypeName(j));
+    for (auto it = j.begin(); it != j.end(); ++it) {
+        std::string ptr = "/materials/" + pointerEscape(it.key());
+        auto m = readMaterial(it.value(), ptr, ctx);
+        m->setName(it.key());
+        ctx.materials[it.key()] = int(ctx.scene->materials.size());
+        ctx.scene->materials.push_back(std::move(m));
+    }
+}
+
+void readShape(const Json& j, const std::string& ptr, Context& ctx) {
+    const std::vector<std::string> types = {"sphere", "quad", "disk", "cylinder", "torus", "mesh"};
+    if (!j.is_object()) throw InputError(ptr, "expected an object, got " + jsonTypeName(j));
+    if (!j.contains("type")) throw InputError(ptr, "missing required key 'type'");
+    std::string type = j.at("type").is_string() ? j.at("type").get<std::string>() : "";
+    std::vector<std::string> keys = {"type", "name", "material", "transform", "segments"};
+    if (type == "sphere") keys.push_back("radius");
+    else if (type == "quad") keys.push_back("size");
+    else if (type == "disk") keys.push_back("radius");
+    else if (type == "cylinder") { keys.push_back("radius"); keys.push_back("height"); }
+    else if (type == "torus") { keys.push_back("major_radius"); keys.push_back("minor_radius"); }
+    else if (type == "mesh") { keys.push_back("file"); }
+    else
+        throw InputError(ptr + "/type", "unknown shape type '" + (type.empty() ? j.at("type").dump() : type) +
+                                            "'; valid types: sphere, quad, disk, cylinder, torus, mesh",
+                         nearestName(type, types));
+    JsonReader r(j, ptr, keys);
+    ShapeInstance sh;
+    sh.name = r.string("name", type);
+    r.require("material");
+    sh.material = materialIndex(ctx, r, "material");
+    int seg = r.integer("segments", 128, 8, 4096);
+    BuiltinShape b;
+    if (type == "sphere")
+        b = makeSphere(r.number("radius", 1.f, 1e-6f, kBig), seg);
+    else if (type == "quad") {
+        auto s = r.numbers("size", 2, {1.f, 1.f}, 1e-6f, kBig);
+        b = makeQuad(s[0], s[1]);
+    } else if (type == "disk")
+        b = makeDisk(r.number("radius", 1.f, 1e-6f, kBig), seg);
+    else if (type == "cylinder")
+        b = makeCylinder(r.number("radius", 1.f, 1e-6f, kBig), r.number("height", 1.f, 1e-6f, kBig), seg);
+    else if (type == "torus") {
+        float R = r.number("major_radius", 1.f, 1e-6f, kBig), rr = r.number("minor_radius", 0.25f, 1e-6f, kBig);
+        if (rr >= R) r.fail("minor_radius", "minor_radius must be smaller than major_radius");
+        b = makeTorus(R, rr, seg);
+    } else {
+        std::string file = fileMustExist(ctx, r, "file");
+        try {
+            b.mesh = loadMesh(file);
+        } catch (const MeshLoadError& e) {
+            throw IoError(r.pointer("file") + ": " + e.what());
+        }
+    }
+    sh.mesh = std::move(b.mesh);
+    sh.surface = b.surface;
+    transformMesh(sh, readTransform(r));
+    ctx.scene->shapes.push_back(std::move(sh));
+}
+
+// Radiant power -> radiance or intensity, following Blender's light units.
+Color3 lightStrength(const JsonReader& r, const std::string& perUnitKey, float powerToUnit, const std::string& powerKey = "power") {
+    Color3 color = r.color("color", Color3(1.f));
+    if (r.has(powerKey) && r.has(perUnitKey)) r.fail(perUnitKey, "give either '" + powerKey + "' or '" + perUnitKey + "', not both");
+    if (r.has(powerKey)) return color * r.number(powerKey, 0.f, 0.f, 1e12f) * powerToUnit;
+    if (!r.has(perUnitKey)) r.fail("", "missing required key '" + powerKey + "' (or '" + perUnitKey + "')");
+    return color * r.number(perUnitKey, 0.f, 0.f, 1e12f);
+}
+
+void readLight(const Json& j, const std::string& ptr, Context& ctx) {
+    const std::vector<std::string> types = {"point", "spot", "directional", "quad", "environment"};
+    if (!j.is_object()) throw InputError(ptr, "expected an object, got " + jsonTypeName(j));
+    if (!j.contains("type")) throw InputError(ptr, "missing required key 'type'");
+    std::string type = j.at("type").is_string() ? j.at("type").get<std::string>() : "";
+    Scene& s = *ctx.scene;
+    std::unique_ptr<Light> light;
+    if (type == "point") {
+        JsonReader r(j, ptr, {"type", "name", "position", "power", "intensity", "color"});
+        light = std::make_unique<PointLight>(r.requiredVec3("position"), lightStrength(r, "intensity", kInv4Pi));
+    } else if (type == "spot") {
+        JsonReader r(j, ptr, {"type", "name", "position", "look_at", "cone_angle", "blend", "power", "intensity", "color"});
+        Vec3 p = r.requiredVec3("position"), at = r.requiredVec3("look_at");
+        if (glm::length(at - p) < 1e-9f) r.fail("look_at", "look_at equals position");
+        light = std::make_unique<SpotLight>(p, at - p, r.number("cone_angle", 45.f, 0.01f, 180.f),
+                                            r.number("blend", 0.15f, 0.f, 1.f), lightStrength(r, "intensity", kInv4Pi));
+    } else if (type == "directional") {
+        JsonReader r(j, ptr, {"type", "name", "direction", "irradiance", "color"});
+        Vec3 d = r.requiredVec3("direction");
+        if (glm::length(d) < 1e-9f) r.fail("direction", "direction must be non-zero");
+        r.require("irradiance");
+        light = std::make_unique<DirectionalLight>(d, r.color("color", Color3(1.f)) * r.number("irradiance", 1.f, 0.f, 1e12f));
+    } else if (type == "quad") {
+        JsonReader r(j, ptr, {"type", "name", "position", "look_at", "up", "size", "radiance", "power", "color", "two_sided"});
+        Vec3 c = r.requiredVec3("position"), at = r.requiredVec3("look_at");
+        Vec3 n = at - c;
+        if (glm::length(n) < 1e-9f) r.fail("look_at", "look_at equals position");
+        n = glm::normalize(n);
+        Vec3 up = r.vec3("up", std::abs(n.z) > 0.99f ? Vec3(0, 1, 0) : Vec3(0, 0, 1));
+        Vec3 ex = glm::cross(up, n);
+        if (glm::length(ex) < 1e-6f) r.fail("up", "up is parallel to the light's normal");
+        ex = glm::normalize(ex);
+        Vec3 ey = glm::cross(n, ex);
+        auto size = r.numbers("size", 2, {1.f, 1.f}, 1e-6f, kBig);
+        bool twoSided = r.boolean("two_sided", false);
+        float area = size[0] * size[1];
+        Color3 L = lightStrength(r, "radiance", 1.f / (kPi * area * (twoSided ? 2.f : 1.f)));
+        // corner + edges with cross(eu, ev) = n (emitting side faces look_at)
+        Vec3 eu = ex * size[0], ev = ey * size[1];
+        Vec3 corner = c - 0.5f * eu - 0.5f * ev;
+        light = std::make_unique<QuadLight>(corner, eu, ev, L, twoSided);
+        // The emitter is visible geometry too.
+        ShapeInstance sh;
+        sh.name = "light:" + std::to_string(s.lights.size());
+        sh.mesh.positions = {corner, corner + eu, corner + eu + ev, corner + ev};
+        sh.mesh.normals = {n, n, n, n};
+        sh.mesh.uvs = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+        sh.mesh.indices = {{0, 1, 2}, {0, 2, 3}};
+        sh.areaLight = int(s.lights.size());
+        s.shapes.push_back(std::move(sh));
+    } else if (type == "environment") {
+        JsonReader r(j, ptr, {"type", "name", "color", "strength", "file", "colorspace", "rotation"});
+        Color3 scale = r.color("color", Color3(1.f)) * r.number("strength", 1.f, 0.f, 1e9f);
+        if (r.has("file")) {
+            std::string file = fileMustExist(ctx, r, "file");
+            std::string cs = r.string("colorspace", "");
+            if (cs.empty()) r.fail("", "missing required key 'colorspace' (textures declare their colorspace)");
+            if (cs != "raw" && !s.colorConfig->hasColorspace(cs)) {
+                auto names = s.colorConfig->colorspaces();
+                r.fail("colorspace", "unknown colorspace '" + cs + "'", nearestName(cs, names));
+            }
+            TextureHandle h;
+            try {
+                h = s.textures->load(file, cs);
+            } catch (const TextureError& e) {
+                throw IoError(r.pointer("file") + ": " + e.what());
+            }
+            int w = s.textures->width(h), hh = s.textures->height(h), ch = s.textures->channels(h);
+            const auto& px = s.textures->pixels(h);
+            std::vector<float> rgb(size_t(w) * hh * 3);
+            for (size_t i = 0; i < size_t(w) * hh; ++i)
+                for (int c = 0; c < 3; ++c) rgb[i * 3 + c] = px[i * ch + std::min(c, ch - 1)];
+            light = std::make_unique<EnvironmentLight>(std::move(rgb), w, hh, r.number("rotation", 0.f, -3600.f, 3600.f), scale);
+        } else {
+            light = std::make_unique<EnvironmentLight>(scale);
+        }
+    } else {
+        throw InputError(ptr + "/type", "unknown light type '" + (type.empty() ? j.at("type").dump() : type) +
+                                            "'; valid types: point, spot, directional, quad, environment",
+                         nearestName(type, types));
+    }
+    light->name = j.value("name", type);
+    s.lights.push_back(std::move(light));
+}
+
+Json parseJson(const std::string& text, const std::string& name) {
+    try {
+        return Json::parse(text);
+    } catch (const Json::exception& e) {
+        // Convert the byte offset (parse errors) into line:column for the message.
+        size_t byte = 0;
+        if (auto* pe = dynamic_cast<const Json::parse_error*>(&e)) byte = pe->byte;
+        size_t line = 1, col = 1;
+        for (size_t i = 0; i < std::min(text.size(), size_t(byte > 0 ? byte - 1 : 0)); ++i) {
+            if (text[i] == '\n') {
+                ++line;
+                col = 1;
+            } else
+                ++col;
+        }
+        std::string what = e.what();
+        auto pos = what.find("] ");
+        std::string where = byte > 0 ? name + ":" + std::to_string(line) + ":" + std::to_string(col) : name;
+        throw InputError("", where + ": malformed JSON (" + (pos != std::string::npos ? what.substr(pos + 2) : what) + ")");
+    }
+}
+
+}  // namespace
+
+Scene loadSceneFromString(const std::string& text, const std::string& baseDir, const SceneOverrides& ov,
+                          const std::string& name) {
+    Json root = parseJson(text, name);
+    JsonReader top(root, "", {"version", "render", "color", "camera", "textures", "materials", "shapes", "lights", "$schema", "description"});
+    if (top.has("version")) {
+        int v = top.integer("version", 1, 0, 1000000);
+        if (v != 1) top.fail("version", "unsupported scene version " + std::to_string(v) + "; this build reads version 1");
+    }
+    Scene scene;
+    scene.sourcePath = name;
+    Context ctx;
+    ctx.baseDir = baseDir;
+    ctx.scene = &scene;
+    if (top.has("render")) readRender(root.at("render"), scene);
+    if (ov.spp > 0) scene.render.spp = ov.spp;
+    if (ov.width > 0) scene.render.width = ov.width;
+    if (ov.height > 0) scene.render.height = ov.height;
+    if (ov.seed >= 0) scene.render.seed = uint64_t(ov.seed);
+    if (int64_t(scene.render.width) * scene.render.height > kMaxPixels)
+        throw InputError("/render/width", "image exceeds the limit of " + std::to_string(kMaxPixels) + " pixels");
+    if (ov.crop) {
+        const CropWindow& c = *ov.crop;
+        if (c.x0 < 0 || c.y0 < 0 || c.x1 > scene.render.width || c.y1 > scene.render.height || c.x0 >= c.x1 || c.y0 >= c.y1)
+            throw InputError("/render", "crop window " + std::to_string(c.x0) + "," + std::to_string(c.y0) + "," +
+                                            std::to_string(c.x1) + "," + std::to_string(c.y1) + " is not inside the " +
+                                            std::to_string(scene.render.width) + "x" + std::to_string(scene.render.height) + " image");
+        scene.render.crop = c;
+    }
+    if (scene.render.pixelCenter && scene.render.spp != 1)
+        throw InputError("/render/pixel_center", "pixel_center sampling needs spp = 1 (got " + std::to_string(scene.render.spp) + ")");
+    if (top.has("color")) readColor(root.at("color"), scene);
+    try {
+        scene.colorConfig = ColorConfig::load(scene.color.config == "builtin" ? "builtin" : resolvePath(ctx, scene.color.config));
+    } catch (const ColorError& e) {
+        throw InputError("/color/config", e.what());
+    }
+    if (!scene.color.view.empty() && !scene.colorConfig->hasView(scene.color.view))
+        throw InputError("/color/view", "unknown view '" + scene.color.view + "'",
+                         nearestName(scene.color.view, scene.colorConfig->views()));
+    scene.textures = std::make_shared<TextureStore>(scene.colorConfig);
+
+    top.require("camera");
+    readCamera(root.at("camera"), scene);
+    if (top.has("textures")) readTextures(root.at("textures"), ctx);
+    if (top.has("materials")) readMaterials(root.at("materials"), ctx);
+    top.require("shapes");
+    const Json& shapes = root.at("shapes");
+    if (!shapes.is_array()) throw InputError("/shapes", "expected an array of shapes, got " + jsonTypeName(shapes));
+    for (size_t i = 0; i < shapes.size(); ++i) readShape(shapes[i], "/shapes/" + std::to_string(i), ctx);
+    if (top.has("lights")) {
+        const Json& lights = root.at("lights");
+        if (!lights.is_array()) throw InputError("/lights", "expected an array of lights, got " + jsonTypeName(lights));
+        for (size_t i = 0; i < lights.size(); ++i) readLight(lights[i], "/lights/" + std::to_string(i), ctx);
+    }
+    return scene;
+}
+
+Scene loadScene(const std::string& path, const SceneOverrides& overrides) {
+    std::ifstream f(path, std::ios::binary);
+    if (!f) throw IoError("cannot open scene file '" + path + "'");
+    std::stringstream ss;
+    ss << f.rdbuf();
+    std::string base = fs::path(path).parent_path().string();
+    if (base.empty()) base = ".";
+    return loadSceneFromString(ss.str(), base, overrides, path);
+}
+
+std::string describeScene(const Scene& s) {
+    std::ostringstream o;
+    size_t tris = 0;
+    for (auto& sh : s.shapes) tris += sh.mesh.triangleCount();
+    o << "scene: " << s.sourcePath << "\n";
+    o << "image: " << s.render.width << "x" << s.render.height << ", " << s.render.spp << " spp, seed " << s.render.seed
+      << ", " << (s.render.integrator == IntegratorKind::Path ? "path tracer (max depth " + std::to_string(s.render.maxDepth) + ")" : std::string("direct lighting"))
+      << ", " << (s.render.filter == PixelFilterKind::Box ? "box" : "gaussian") << " filter\n";
+    o << "camera: position (" << s.camera.position.x << ", " << s.camera.position.y << ", " << s.camera.position.z
+      << "), fov " << s.camera.fovDegrees << " deg (" << (s.camera.fovIsHorizontal ? "x" : "y") << ")\n";
+    o << "shapes: " << s.shapes.size() << " (" << tris << " triangles)\n";
+    for (auto& sh : s.shapes)
+        o << "  - " << sh.name << ": " << sh.mesh.triangleCount() << " triangles"
+          << (sh.areaLight >= 0 ? ", area light" : ", material '" + s.materials[sh.material]->name() + "'") << "\n";
+    o << "materials: " << s.materials.size() << "\n";
+    o << "lights: " << s.lights.size() << "\n";
+    for (auto& l : s.lights) o << "  - " << l->name << "\n";
+    return o.str();
+}
+
+}  // namespace specula

@@ -1,0 +1,230 @@
+// The `specula` command-line tool: render JSON scenes, compare images, validate scenes. A thin layer
+// over the library API (core/api/specula.h); exit codes are documented in docs/cli.md.
+#include "core/api/specula.h"
+
+#include <CLI/CLI.hpp>
+
+#include <atomic>
+#include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <sstream>
+#include <unistd.h>
+
+namespace fs = std::filesystem;
+using namespace specula;
+
+namespace {
+
+std::atomic<bool> gCancel{false};
+
+extern "C" void onSigint(int) { gCancel.store(true); }
+
+std::string formatSeconds(double s) {
+    char buf[32];
+    if (s < 60)
+        std::snprintf(buf, sizeof buf, "%.1fs", s);
+    else
+        std::snprintf(buf, sizeof buf, "%dm%02ds", int(s) / 60, int(s) % 60);
+    return buf;
+}
+
+void printBar(const RenderProgress& p) {
+    const int width = 30;
+    int filled = p.tilesTotal ? p.tilesDone * width / p.tilesTotal : width;
+    std::string bar(size_t(filled), '#');
+    bar.resize(width, '.');
+    std::fprintf(stderr, "\r[%s] %d/%d tiles  %.2f Msamples/s  ETA %s   ", bar.c_str(), p.tilesDone, p.tilesTotal,
+                 p.samplesPerSecond / 1e6, formatSeconds(p.etaSeconds).c_str());
+    std::fflush(stderr);
+}
+
+void printJsonTile(const RenderProgress& p) {
+    std::printf(
+        "{\"event\":\"tile\",\"done\":%d,\"total\":%d,\"progress\":%.6f,\"x0\":%d,\"y0\":%d,\"x1\":%d,\"y1\":%d,"
+        "\"elapsed\":%.3f,\"samples_per_second\":%.1f,\"eta\":%.3f}\n",
+        p.tilesDone, p.tilesTotal, p.tilesTotal ? double(p.tilesDone) / p.tilesTotal : 1.0, p.tileX0, p.tileY0, p.tileX1,
+        p.tileY1, p.elapsedSeconds, p.samplesPerSecond, p.etaSeconds);
+    std::fflush(stdout);
+}
+
+bool parsePair(const std::string& s, char sep, int& a, int& b) {
+    std::istringstream in(s);
+    char c;
+    return (in >> a >> c >> b) && c == sep && in.peek() == EOF;
+}
+
+int reportError(const std::exception& e, int code) {
+    std::fprintf(stderr, "specula: error: %s\n", e.what());
+    return code;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    CLI::App app{"Specula: physically based renderer for glints and filtered specular materials"};
+    app.set_version_flag("--version", std::string("specula ") + SPECULA_VERSION);
+    app.require_subcommand(1);
+    int exitCode = kExitOk;
+
+    // ---- render ---------------------------------------------------------------------------------
+    auto* render = app.add_subcommand("render", "Render a JSON scene to EXR (all AOVs) and an OCIO-viewed PNG");
+    std::string scenePath, outPath, resolution, crop, progress;
+    int spp = 0, threads = 0;
+    int64_t seed = -1;
+    render->add_option("scene", scenePath, "Scene file (JSON, format v1)")->required();
+    render->add_option("-o,--output", outPath, "Output EXR (default: <scene name>.exr in the current folder)");
+    render->add_option("--spp", spp, "Samples per pixel (overrides the scene)")->check(CLI::Range(1, 1 << 20));
+    render->add_option("--threads", threads, "Worker threads (default: all cores)")->check(CLI::Range(0, 1024));
+    render->add_option("--seed", seed, "Sampler seed (overrides the scene)")->check(CLI::Range(int64_t(0), int64_t(2147483647)));
+    render->add_option("--resolution", resolution, "Image size WxH (overrides the scene)");
+    render->add_option("--crop", crop, "Render only pixels x0,y0,x1,y1 (x1,y1 exclusive); output is the crop");
+    render->add_option("--progress", progress, "Progress output: bar (stderr), json (stdout lines) or none")
+        ->check(CLI::IsMember({"bar", "json", "none"}));
+    render->callback([&] {
+        SceneOverrides ov;
+        ov.spp = spp;
+        ov.seed = seed;
+        if (!resolution.empty() && !parsePair(resolution, 'x', ov.width, ov.height)) {
+            std::fprintf(stderr, "specula: error: --resolution expects WxH, got '%s'\n", resolution.c_str());
+            exitCode = kExitUsage;
+            return;
+        }
+        if (!resolution.empty() && (ov.width < 1 || ov.height < 1 || ov.width > 16384 || ov.height > 16384)) {
+            std::fprintf(stderr, "specula: error: --resolution %s is outside 1x1..16384x16384\n", resolution.c_str());
+            exitCode = kExitUsage;
+            return;
+        }
+        if (!crop.empty()) {
+            CropWindow c;
+            char s1, s2, s3;
+            std::istringstream in(crop);
+            if (!(in >> c.x0 >> s1 >> c.y0 >> s2 >> c.x1 >> s3 >> c.y1) || s1 != ',' || s2 != ',' || s3 != ',') {
+                std::fprintf(stderr, "specula: error: --crop expects x0,y0,x1,y1, got '%s'\n", crop.c_str());
+                exitCode = kExitUsage;
+                return;
+            }
+            ov.crop = c;
+        }
+        if (outPath.empty()) outPath = fs::path(scenePath).stem().string() + ".exr";
+        if (fs::path(outPath).extension() != ".exr") {
+            std::fprintf(stderr, "specula: error: output '%s' must end in .exr (a PNG is written beside it)\n", outPath.c_str());
+            exitCode = kExitUsage;
+            return;
+        }
+        fs::path outDir = fs::path(outPath).parent_path();
+        if (!outDir.empty() && !fs::is_directory(outDir)) {
+            std::fprintf(stderr, "specula: error: output folder '%s' does not exist\n", outDir.string().c_str());
+            exitCode = kExitIo;
+            return;
+        }
+        std::string mode = progress.empty() ? (isatty(STDERR_FILENO) ? "bar" : "none") : progress;
+        Scene scene;
+        try {
+            scene = loadScene(scenePath, ov);
+        } catch (const InputError& e) {
+            exitCode = reportError(e, kExitBadInput);
+            return;
+        } catch (const IoError& e) {
+            exitCode = reportError(e, kExitIo);
+            return;
+        } catch (const std::exception& e) {
+            exitCode = reportError(e, kExitBadInput);
+            return;
+        }
+        std::signal(SIGINT, onSigint);
+        std::signal(SIGTERM, onSigint);
+        RenderOptions opts;
+        opts.threads = threads;
+        opts.cancel = &gCancel;
+        if (mode == "bar") opts.onTile = printBar;
+        if (mode == "json") opts.onTile = printJsonTile;
+        RenderOutput result = renderScene(scene, opts);
+        if (mode == "bar") std::fprintf(stderr, "\n");
+        const RenderStats& st = result.stats;
+        try {
+            if (st.cancelled) {
+                // Never clobber the target: the partial image goes to a separate file.
+                std::string partial = fs::path(outPath).replace_extension(".partial.exr").string();
+                result.images.metadata["specula:partial"] = "true";
+                writeExr(partial, result.images, *scene.colorConfig);
+                std::fprintf(stderr, "specula: interrupted after %d/%d tiles; partial image written to %s\n", st.tilesDone,
+                             st.tilesTotal, partial.c_str());
+                if (mode == "json")
+                    std::printf("{\"event\":\"cancelled\",\"done\":%d,\"total\":%d,\"partial\":\"%s\"}\n", st.tilesDone,
+                                st.tilesTotal, partial.c_str());
+                exitCode = kExitInterrupted;
+                return;
+            }
+            std::string png = writeRenderOutputs(outPath, scene, result.images);
+            double sps = st.seconds > 0 ? double(st.samples) / st.seconds : 0.0;
+            if (mode == "json")
+                std::printf("{\"event\":\"done\",\"seconds\":%.3f,\"samples\":%llu,\"invalid_samples\":%llu,"
+                            "\"samples_per_second\":%.1f,\"exr\":\"%s\",\"png\":\"%s\"}\n",
+                            st.seconds, (unsigned long long)st.samples, (unsigned long long)st.invalidSamples, sps,
+                            outPath.c_str(), png.c_str());
+            else
+                std::fprintf(stderr, "specula: rendered %dx%d at %d spp in %s (%.2f Msamples/s); %llu NaN/Inf samples dropped\n"
+                                     "specula: wrote %s and %s\n",
+                             result.images.width, result.images.height, scene.render.spp, formatSeconds(st.seconds).c_str(),
+                             sps / 1e6, (unsigned long long)st.invalidSamples, outPath.c_str(), png.c_str());
+        } catch (const std::exception& e) {
+            exitCode = reportError(e, kExitIo);
+        }
+    });
+
+    // ---- compare --------------------------------------------------------------------------------
+    auto* compare = app.add_subcommand("compare", "Compare two images: RMSE, MAE, PSNR (OpenImageIO)");
+    std::string imgA, imgB, aov = "beauty", diffOut;
+    bool compareJson = false;
+    compare->add_option("a", imgA, "First image")->required();
+    compare->add_option("b", imgB, "Second image (reference)")->required();
+    compare->add_option("--aov", aov, "AOV (EXR layer) to compare: beauty, diffuse, specular, ...");
+    compare->add_option("--diff", diffOut, "Write a false-colour |A-B| map (PNG)");
+    compare->add_flag("--json", compareJson, "Print one JSON object instead of text");
+    compare->callback([&] {
+        try {
+            CompareResult r = compareImages(imgA, imgB, aov, diffOut);
+            if (compareJson)
+            {
+                // JSON has no infinity: identical images report "psnr": null.
+                char psnr[32] = "null";
+                if (std::isfinite(r.psnr)) std::snprintf(psnr, sizeof psnr, "%.6g", r.psnr);
+                std::printf("{\"aov\":\"%s\",\"rmse\":%.9g,\"mae\":%.9g,\"psnr\":%s,\"mean_a\":%.9g,\"mean_b\":%.9g}\n",
+                            aov.c_str(), r.rmse, r.mae, psnr, r.meanA, r.meanB);
+            }
+            else
+                std::printf("aov   %s (%dx%d, %d channels)\nRMSE  %.6g\nMAE   %.6g\nPSNR  %.3f dB\n", aov.c_str(), r.width,
+                            r.height, r.channels, r.rmse, r.mae, r.psnr);
+        } catch (const std::exception& e) {
+            exitCode = reportError(e, kExitIo);
+        }
+    });
+
+    // ---- info -----------------------------------------------------------------------------------
+    auto* info = app.add_subcommand("info", "Validate a scene and print a summary");
+    std::string infoScene;
+    info->add_option("scene", infoScene, "Scene file")->required();
+    info->callback([&] {
+        try {
+            Scene s = loadScene(infoScene);
+            std::printf("%s", describeScene(s).c_str());
+        } catch (const InputError& e) {
+            exitCode = reportError(e, kExitBadInput);
+        } catch (const IoError& e) {
+            exitCode = reportError(e, kExitIo);
+        } catch (const std::exception& e) {
+            exitCode = reportError(e, kExitBadInput);
+        }
+    });
+
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::ParseError& e) {
+        int rc = app.exit(e);
+        return rc == 0 ? kExitOk : kExitUsage;
+    }
+    return exitCode;
+}
