@@ -37,6 +37,8 @@ public:
     virtual ~AnalyticSurface() = default;
     // pObject: a point on (or very near) the tessellation, in object space.
     virtual SurfaceGeometry at(const Vec3& pObject) const = 0;
+    // Planar surfaces coincide with their tessellation, so hits need no refinement onto the surface.
+    virtual bool isPlanar() const { return false; }
 };
 
 struct BuiltinShape {

@@ -70,6 +70,27 @@ public:
         g.dndv = g.dpdv / float(r_);
         return g;
     }
+    // Direct evaluation without trigonometric round trips (the hot path of every sphere hit):
+    // n = p/|p|, dp/du = 2π (-y, x, 0), dp/dv = π r (cosθ cosφ, cosθ sinφ, -sinθ).
+    SurfaceGeometry at(const Vec3& pObject) const override {
+        float len = glm::length(pObject);
+        if (!(len > 0.f)) return eval(0.0, 0.0);
+        const float r = float(r_);
+        SurfaceGeometry g;
+        g.n = pObject / len;
+        g.p = g.n * r;
+        float rho = std::sqrt(g.n.x * g.n.x + g.n.y * g.n.y);  // sinθ
+        float rhoc = std::max(rho, float(kDegenerateEps));
+        float cp = rho > 0.f ? g.n.x / rho : 1.f, sp = rho > 0.f ? g.n.y / rho : 0.f;
+        float ct = g.n.z;
+        const float k2Pi = float(k2PiD), kPi = float(kPiD);
+        g.uv = Vec2(float(azimuthU(g.n.x, g.n.y)), std::clamp(std::atan2(rho, ct) / kPi, 0.f, 1.f));  // atan2: well conditioned at the poles
+        g.dpdu = Vec3(-k2Pi * r * rhoc * sp, k2Pi * r * rhoc * cp, 0.f);
+        g.dpdv = Vec3(kPi * r * ct * cp, kPi * r * ct * sp, -kPi * r * rho);
+        g.dndu = g.dpdu / r;
+        g.dndv = g.dpdv / r;
+        return g;
+    }
     Vec2 project(const Vec3& p) const override {
         double x = p.x, y = p.y, z = p.z;
         double len = std::sqrt(x * x + y * y + z * z);
@@ -86,6 +107,7 @@ private:
 class QuadSurface final : public ParametricSurface {
 public:
     QuadSurface(double sx, double sy) : sx_(sx), sy_(sy) {}
+    bool isPlanar() const override { return true; }
     SurfaceGeometry eval(double u, double v) const override {
         SurfaceGeometry g;
         g.p = toVec3(sx_ * (u - 0.5), sy_ * (v - 0.5), 0.0);
@@ -108,6 +130,7 @@ private:
 class DiskSurface final : public ParametricSurface {
 public:
     explicit DiskSurface(double r) : r_(r) {}
+    bool isPlanar() const override { return true; }
     SurfaceGeometry eval(double u, double v) const override {
         double phi = k2PiD * u, sp = std::sin(phi), cp = std::cos(phi);
         double rho = r_ * (1.0 - v), rhoc = std::max(rho, kDegenerateEps * r_);

@@ -28,7 +28,7 @@ Accel::Accel(const Scene& scene) : impl_(std::make_unique<Impl>()), scene_(scene
     if (!impl_->device) throw std::runtime_error("Embree: cannot create device");
     rtcSetDeviceErrorFunction(impl_->device, embreeError, nullptr);
     impl_->scene = rtcNewScene(impl_->device);
-    rtcSetSceneFlags(impl_->scene, RTC_SCENE_FLAG_ROBUST);
+    rtcSetSceneFlags(impl_->scene, RTC_SCENE_FLAG_ROBUST);  // watertight: no cracks between triangles
     rtcSetSceneBuildQuality(impl_->scene, RTC_BUILD_QUALITY_HIGH);
     for (size_t s = 0; s < scene.shapes.size(); ++s) {
         const TriangleMesh& m = scene.shapes[s].mesh;
@@ -187,7 +187,9 @@ ShadingPoint Accel::shadingPoint(const RayDifferential& ray, const Hit& hit) con
         const Vec3 dObj = Mat3(sh.worldToObject) * ray.d;
         float t = hit.t;
         SurfaceGeometry g = sh.surface->at(oObj + t * dObj);
-        for (int it = 0; it < 2; ++it) {
+        // Only rays with differentials need positions continuous across facets; planar shapes are exact.
+        const int iterations = (ray.hasDifferentials && !sh.surface->isPlanar()) ? 2 : 0;
+        for (int it = 0; it < iterations; ++it) {
             float denom = glm::dot(g.n, dObj);
             if (std::abs(denom) < 1e-6f) break;
             float dt = glm::dot(g.n, g.p - (oObj + t * dObj)) / denom;

@@ -30,6 +30,22 @@ struct Throughput {
     Color3 d{0.f}, s{0.f};
     Color3 total() const { return d + s; }
 };
+
+// Adds an indirect contribution L (radiance after at least one bounce) to the AOVs, clamped like
+// Cycles' clamp_indirect: the contribution is scaled so its largest component is at most 'clamp'.
+void addIndirect(SampleValue& out, const Throughput& beta, const Color3& L, float clamp) {
+    Color3 d = beta.d * L, s = beta.s * L;
+    if (clamp > 0.f) {
+        float m = maxComponent(d + s);
+        if (m > clamp) {
+            float k = clamp / m;
+            d *= k;
+            s *= k;
+        }
+    }
+    out.diffuse += d;
+    out.specular += s;
+}
 }  // namespace
 
 SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampler, ScratchArena& arena) const {
@@ -53,12 +69,11 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
     }
 
     const uint32_t firstBounceDim = 4;  // 0-1 pixel position, 2-3 lens
+    const float clamp = scene_.render.clampIndirect;
     Throughput beta;
     beta.d = beta.s = Color3(1.f);  // split happens at the first scattering event
     Color3 emitted(0.f);
     float prevBsdfPdf = 0.f;
-    bool prevSpecularDelta = true;  // camera ray: no MIS
-    (void)prevSpecularDelta;
 
     for (int depth = 0;; ++depth) {
         sampler.setDimension(firstBounceDim + uint32_t(depth) * dimsPerBounce_);
@@ -71,10 +86,8 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
             Color3 Le = material.emission(sp);
             if (depth == 0)
                 emitted += Le;
-            else {
-                out.diffuse += beta.d * Le;
-                out.specular += beta.s * Le;
-            }
+            else
+                addIndirect(out, beta, Le, clamp);
         }
         const Vec3 wo = sp.frame.toLocal(sp.wo);
         if (depth == 0) {
@@ -105,9 +118,7 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
                 out.diffuse += f.diffuse * scale;
                 out.specular += f.specular * scale;
             } else {
-                Color3 c = f.total() * scale;
-                out.diffuse += beta.d * c;
-                out.specular += beta.s * c;
+                addIndirect(out, beta, f.total() * scale, clamp);
             }
         }
 
@@ -142,8 +153,12 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
                 if (!l->isEnvironment()) continue;
                 Color3 Le = l->radiance(wiW);
                 float w = powerHeuristic(prevBsdfPdf, l->pdf(sp.pGeom, wiW, 0.f));
-                out.diffuse += beta.d * Le * w;
-                out.specular += beta.s * Le * w;
+                if (depth == 0) {
+                    out.diffuse += beta.d * Le * w;
+                    out.specular += beta.s * Le * w;
+                } else {
+                    addIndirect(out, beta, Le * w, clamp);
+                }
             }
             break;
         }
@@ -153,8 +168,12 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
             ShadingPoint lp = accel_.shadingPoint(next, h);
             Color3 Le = l.radiance(wiW, lp.frontFacing);
             float w = powerHeuristic(prevBsdfPdf, l.pdf(sp.pGeom, wiW, h.t));
-            out.diffuse += beta.d * Le * w;
-            out.specular += beta.s * Le * w;
+            if (depth == 0) {
+                out.diffuse += beta.d * Le * w;
+                out.specular += beta.s * Le * w;
+            } else {
+                addIndirect(out, beta, Le * w, clamp);
+            }
             break;
         }
         if (depth >= maxDepth_) break;

@@ -34,6 +34,7 @@ struct RenderSettings {
     PixelFilterKind filter = PixelFilterKind::Box;
     float gaussianSigma2 = 1.f / (2.f * kPi);  // σ² of the Gaussian filter in pixel² (T&K 2021 reference)
     bool pixelCenter = false;  // spp = 1 samples the pixel centre (validation.md §1)
+    float clampIndirect = 0.f; // max component of one indirect contribution (Cycles' clamp_indirect); 0 = off
     std::optional<CropWindow> crop;
 };
 
