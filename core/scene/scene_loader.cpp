@@ -5,7 +5,7 @@
 #include "core/color/color_config.h"
 #include "core/geometry/mesh_io.h"
 #include "core/geometry/shapes.h"
-#include "core/scene/builtin_materials.h"
+#include "core/graph/graph_material.h"
 #include "core/scene/json_reader.h"
 #include "core/texture/texture_store.h"
 
@@ -34,7 +34,6 @@ constexpr float kBig = 1e7f;
 struct Context {
     std::string baseDir;
     Scene* scene = nullptr;
-    std::map<std::string, TextureHandle> textures;
     std::map<std::string, int> materials;
 };
 
@@ -140,27 +139,6 @@ void transformMesh(ShapeInstance& sh, const Mat4& M) {
         for (auto& i : sh.mesh.indices) std::swap(i.y, i.z);
 }
 
-void readTextures(const Json& j, Context& ctx) {
-    if (!j.is_object()) throw InputError("/textures", "expected an object mapping names to textures, got " + jsonTypeName(j));
-    for (auto it = j.begin(); it != j.end(); ++it) {
-        std::string ptr = "/textures/" + pointerEscape(it.key());
-        JsonReader r(it.value(), ptr, {"file", "colorspace"});
-        std::string file = fileMustExist(ctx, r, "file");
-        r.require("colorspace");  // explicit by design (architecture.md §8.7)
-        std::string cs = r.string("colorspace", "");
-        if (cs != "raw" && !ctx.scene->colorConfig->hasColorspace(cs)) {
-            auto names = ctx.scene->colorConfig->colorspaces();
-            names.push_back("raw");
-            r.fail("colorspace", "unknown colorspace '" + cs + "'", nearestName(cs, names));
-        }
-        try {
-            ctx.textures[it.key()] = ctx.scene->textures->load(file, cs);
-        } catch (const TextureError& e) {
-            throw IoError(std::string(ptr + "/file: ") + e.what());
-        }
-    }
-}
-
 int materialIndex(const Context& ctx, const JsonReader& r, const std::string& key) {
     std::string name;
     const Json& v = r.at(key);
@@ -183,60 +161,12 @@ int materialIndex(const Context& ctx, const JsonReader& r, const std::string& ke
     return it->second;
 }
 
-std::shared_ptr<Material> readMaterial(const Json& j, const std::string& ptr, Context& ctx) {
-    if (!j.is_object()) throw InputError(ptr, "expected an object, got " + jsonTypeName(j));
-    if (!j.contains("type")) throw InputError(ptr, "missing required key 'type'");
-    const std::vector<std::string> types = {"diffuse", "ggx", "emission"};
-    std::string type = j.at("type").is_string() ? j.at("type").get<std::string>() : "";
-    if (type == "diffuse") {
-        JsonReader r(j, ptr, {"type", "color", "texture"});
-        Color3 c = r.color("color", Color3(0.8f));
-        if (maxComponent(c) > 1.f) r.fail("color", "diffuse albedo above 1 is not energy conserving");
-        TextureHandle tex;
-        if (r.has("texture")) {
-            std::string name = r.string("texture", "");
-            auto it = ctx.textures.find(name);
-            if (it == ctx.textures.end()) {
-                std::vector<std::string> names;
-                for (auto& t : ctx.textures) names.push_back(t.first);
-                r.fail("texture", "unknown texture '" + name + "'", nearestName(name, names));
-            }
-            tex = it->second;
-        }
-        return std::make_shared<DiffuseMaterial>(c, ctx.scene->textures.get(), tex);
-    }
-    if (type == "ggx") {
-        JsonReader r(j, ptr, {"type", "color", "roughness", "alpha", "anisotropy", "fresnel", "eta", "k", "ior"});
-        if (r.has("roughness") && r.has("alpha")) r.fail("alpha", "give either 'roughness' or 'alpha', not both");
-        float alpha = r.has("alpha") ? r.number("alpha", 0.1f, 0.f, 1.f) : sqr(r.number("roughness", 0.3f, 0.f, 1.f));
-        float aniso = r.number("anisotropy", 0.f, -0.99f, 0.99f);
-        // Kulla-Conty style anisotropy mapping: aspect = sqrt(1 - 0.9 |a|).
-        float aspect = std::sqrt(1.f - 0.9f * std::abs(aniso));
-        float ax = aniso >= 0.f ? alpha / aspect : alpha * aspect;
-        float ay = aniso >= 0.f ? alpha * aspect : alpha / aspect;
-        std::string fr = r.enumeration("fresnel", "schlick", {"schlick", "conductor", "dielectric", "none"});
-        Fresnel f;
-        if (fr == "schlick")
-            f = Fresnel::schlick(r.color("color", Color3(0.9f)));
-        else if (fr == "conductor")
-            f = Fresnel::conductor(r.color("eta", Color3(0.2f, 0.92f, 1.1f)), r.color("k", Color3(3.9f, 2.45f, 2.14f)));
-        else if (fr == "dielectric")
-            f = Fresnel::dielectric(r.number("ior", 1.5f, 1.f, 4.f));
-        return std::make_shared<GgxMaterial>(ax, ay, f);
-    }
-    if (type == "emission") {
-        JsonReader r(j, ptr, {"type", "color", "strength"});
-        return std::make_shared<EmissionMaterial>(r.color("color", Color3(1.f)) * r.number("strength", 1.f, 0.f, 1e9f));
-    }
-    throw InputError(ptr + "/type", "unknown material type '" + j.at("type").dump() + "'; valid types: diffuse, ggx, emission",
-                     nearestName(type, types));
-}
-
 void readMaterials(const Json& j, Context& ctx) {
     if (!j.is_object()) throw InputError("/materials", "expected an object mapping names to materials, got " + jsonTypeName(j));
     for (auto it = j.begin(); it != j.end(); ++it) {
         std::string ptr = "/materials/" + pointerEscape(it.key());
-        auto m = readMaterial(it.value(), ptr, ctx);
+        // Every material is a node graph (docs/graph-format.md), compiled once here.
+        auto m = loadGraphMaterial(it.value(), ptr, GraphLoadContext{ctx.scene->textures.get(), ctx.baseDir});
         m->setName(it.key());
         ctx.materials[it.key()] = int(ctx.scene->materials.size());
         ctx.scene->materials.push_back(std::move(m));
@@ -414,7 +344,7 @@ Json parseJson(const std::string& text, const std::string& name) {
 Scene loadSceneFromString(const std::string& text, const std::string& baseDir, const SceneOverrides& ov,
                           const std::string& name) {
     Json root = parseJson(text, name);
-    JsonReader top(root, "", {"version", "render", "color", "camera", "textures", "materials", "shapes", "lights", "$schema", "description"});
+    JsonReader top(root, "", {"version", "render", "color", "camera", "materials", "shapes", "lights", "$schema", "description"});
     if (top.has("version")) {
         int v = top.integer("version", 1, 0, 1000000);
         if (v != 1) top.fail("version", "unsupported scene version " + std::to_string(v) + "; this build reads version 1");
@@ -454,7 +384,6 @@ Scene loadSceneFromString(const std::string& text, const std::string& baseDir, c
 
     top.require("camera");
     readCamera(root.at("camera"), scene);
-    if (top.has("textures")) readTextures(root.at("textures"), ctx);
     if (top.has("materials")) readMaterials(root.at("materials"), ctx);
     top.require("shapes");
     const Json& shapes = root.at("shapes");

@@ -1,6 +1,7 @@
 // The `specula` command-line tool: render JSON scenes, compare images, validate scenes. A thin layer
 // over the library API (core/api/specula.h); exit codes are documented in docs/cli.md.
 #include "core/api/specula.h"
+#include "plugin/cli/graph_commands.h"
 
 #include <CLI/CLI.hpp>
 
@@ -219,6 +220,9 @@ int main(int argc, char** argv) {
             exitCode = reportError(e, kExitBadInput);
         }
     });
+
+    // ---- glsl / bsdf / plot: material authoring tools (plugin/cli/graph_commands.cpp) ------------
+    addGraphCommands(app, exitCode);
 
     try {
         app.parse(argc, argv);

@@ -24,7 +24,9 @@ std::string q(const std::string& s) { return "'" + s + "'"; }
 const char* kSmallScene = R"({
   "render": {"width": 32, "height": 24, "spp": 2},
   "camera": {"position": [0, -4, 1], "look_at": [0, 0, 0.5]},
-  "materials": {"m": {"type": "ggx", "roughness": 0.3, "color": [0.9, 0.8, 0.7]}, "g": {"type": "diffuse"}},
+  "materials": {
+    "m": {"nodes": {"s": {"type": "bsdf.ggx", "inputs": {"roughness": 0.3, "f0": [0.9, 0.8, 0.7]}}}, "output": "@s.bsdf"},
+    "g": {"nodes": {"d": {"type": "bsdf.diffuse"}}, "output": "@d.bsdf"}},
   "shapes": [{"type": "sphere", "radius": 0.5, "transform": {"translate": [0, 0, 0.5]}, "material": "m"},
              {"type": "quad", "size": [8, 8], "material": "g"}],
   "lights": [{"type": "point", "position": [2, -2, 3], "power": 300}]})";

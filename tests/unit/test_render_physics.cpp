@@ -42,7 +42,7 @@ TEST(WhiteFurnace, DiffuseSphereInConstantEnvironmentReturnsEnvironment) {
         Scene s = sceneFrom(std::string(R"({
             "render": {"width": 48, "height": 48, "spp": 64, "integrator": ")") + integrator + R"("},
             "camera": {"position": [0, -4, 0], "look_at": [0, 0, 0], "fov": 30},
-            "materials": {"white": {"type": "diffuse", "color": 1.0}},
+            "materials": {"white": {"nodes": {"d": {"type": "bsdf.diffuse", "inputs": {"color": 1.0}}}, "output": "@d.bsdf"}},
             "shapes": [{"type": "sphere", "radius": 1, "material": "white"}],
             "lights": [{"type": "environment", "color": [0.7, 0.7, 0.7]}]})");
         RenderOutput r = renderScene(s);
@@ -211,7 +211,7 @@ std::string diffScene(const std::string& shape) {
     // (second-order accurate) are a fair reference for the analytic differentials.
     return R"({"render": {"width": 512, "height": 512},
         "camera": {"position": [0.3, -4, 2.2], "look_at": [0, 0, 0.4], "fov": 40},
-        "materials": {"m": {"type": "diffuse"}},
+        "materials": {"m": {"nodes": {"d": {"type": "bsdf.diffuse"}}, "output": "@d.bsdf"}},
         "shapes": [)" + shape + R"(]})";
 }
 
@@ -291,7 +291,7 @@ TEST(Film, GaussianFilterOfAStepEdgeIsTheNormalCdf) {
     Scene s = sceneFrom(R"({
         "render": {"width": 16, "height": 4, "spp": 4096, "filter": "gaussian"},
         "camera": {"position": [0, -10, 0], "look_at": [0, 0, 0], "fov": 10},
-        "materials": {"glow": {"type": "emission", "color": 1.0}},
+        "materials": {"glow": {"nodes": {"e": {"type": "bsdf.emission", "inputs": {"color": 1.0}}}, "output": "@e.bsdf"}},
         "shapes": [{"type": "quad", "size": [4, 4], "transform": {"translate": [2, 0, 0], "rotate": [90, 0, 0]}, "material": "glow"}]})");
     RenderOutput r = renderScene(s);
     const auto* b = r.images.find("beauty");

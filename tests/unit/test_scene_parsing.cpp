@@ -14,7 +14,13 @@ namespace {
 
 // A minimal valid scene; cases below patch parts of it.
 const char* kCamera = R"("camera": {"position": [0, -5, 1], "look_at": [0, 0, 1]})";
-const char* kMaterials = R"("materials": {"grey": {"type": "diffuse", "color": 0.5}})";
+const char* kMaterials =
+    R"("materials": {"grey": {"nodes": {"d": {"type": "bsdf.diffuse", "inputs": {"color": 0.5}}}, "output": "@d.bsdf"}})";
+
+// A one-node material graph: {"nodes": {"s": {"type": TYPE, "inputs": INPUTS}}, "output": "@s.bsdf"}.
+std::string graph(const std::string& type, const std::string& inputs) {
+    return R"({"nodes": {"s": {"type": ")" + type + R"(", "inputs": )" + inputs + R"(}}, "output": "@s.bsdf"})";
+}
 const char* kShapes = R"("shapes": [{"type": "sphere", "material": "grey"}])";
 
 std::string scene(const std::string& extra, const std::string& camera = kCamera, const std::string& materials = kMaterials,
@@ -85,20 +91,17 @@ std::vector<InvalidCase> invalidCases() {
         {"transform_zero_scale",
          scene("", kCamera, kMaterials, R"("shapes": [{"type": "sphere", "material": "grey", "transform": {"scale": 0}}])"),
          "/shapes/0/transform/scale", "non-zero", ""},
-        {"unknown_material_type", scene("", kCamera, R"("materials": {"m": {"type": "ggxx"}})", kShapes),
-         "/materials/m/type", "unknown material type", "ggx"},
-        {"material_unknown_key", scene("", kCamera, R"("materials": {"grey": {"type": "ggx", "roughnes": 0.2}})", kShapes),
-         "/materials/grey/roughnes", "unknown key 'roughnes'", "roughness"},
-        {"material_roughness_range", scene("", kCamera, R"("materials": {"grey": {"type": "ggx", "roughness": 3}})", kShapes),
-         "/materials/grey/roughness", "outside [0, 1]", ""},
-        {"diffuse_albedo_above_one", scene("", kCamera, R"("materials": {"grey": {"type": "diffuse", "color": [1.5, 0, 0]}})", kShapes),
-         "/materials/grey/color", "not energy conserving", ""},
-        {"material_unknown_texture",
-         scene("", kCamera, R"("materials": {"grey": {"type": "diffuse", "texture": "wood"}})", kShapes),
-         "/materials/grey/texture", "unknown texture 'wood'", ""},
-        {"texture_without_colorspace",
-         scene(R"("textures": {"t": {"file": "demo.json"}})", kCamera, kMaterials, kShapes), "/textures/t",
-         "missing required key 'colorspace'", ""},
+        {"unknown_node_type", scene("", kCamera, R"("materials": {"m": )" + graph("bsdf.ggxx", "{}") + "}", kShapes),
+         "/materials/m/nodes/s/type", "unknown node type", "bsdf.ggx"},
+        {"node_unknown_port", scene("", kCamera, R"("materials": {"grey": )" + graph("bsdf.ggx", R"({"roughnes": 0.2})") + "}", kShapes),
+         "/materials/grey/nodes/s/inputs/roughnes", "unknown", "roughness"},
+        {"node_wrong_literal_type", scene("", kCamera, R"("materials": {"grey": )" + graph("bsdf.ggx", R"({"roughness": "rough"})") + "}", kShapes),
+         "/materials/grey/nodes/s/inputs/roughness", "", ""},
+        {"material_output_unknown_node",
+         scene("", kCamera, R"("materials": {"grey": {"nodes": {"d": {"type": "bsdf.diffuse"}}, "output": "@e.bsdf"}})", kShapes),
+         "/materials/grey/output", "", "d"},
+        {"textures_section_removed", scene(R"("textures": {"t": {"file": "demo.json"}})"), "/textures",
+         "unknown key 'textures'", ""},
         {"unknown_light_type", scene(R"("lights": [{"type": "pointlight", "position": [0,0,3], "power": 10}])"),
          "/lights/0/type", "unknown light type 'pointlight'", "point"},
         {"light_missing_power", scene(R"("lights": [{"type": "point", "position": [0,0,3]}])"), "/lights/0",

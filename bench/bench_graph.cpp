@@ -1,0 +1,112 @@
+// Graph-evaluator overhead: a GGX material built from a node graph (shade + eval through the compiled
+// program) against a direct C++ GgxLobe with the same parameters, in one run; prints the ratio.
+#include "core/graph/graph_material.h"
+#include "core/render/lobes/ggx.h"
+
+#include <benchmark/benchmark.h>
+#include <nlohmann/json.hpp>
+
+#include <cstdio>
+#include <map>
+#include <vector>
+
+using namespace specula;
+
+namespace {
+
+struct Setup {
+    std::shared_ptr<Material> mat;
+    std::vector<Vec3> dirs;
+    Setup() {
+        nlohmann::json m = {{"nodes",
+                             {{"spec",
+                               {{"type", "bsdf.ggx"},
+                                {"inputs", {{"roughness", 0.3}, {"anisotropy", 0.4}, {"f0", {0.95, 0.64, 0.54}}}}}}}},
+                            {"output", "@spec.bsdf"}};
+        mat = loadGraphMaterial(m, "/materials/bench", GraphLoadContext{});
+        for (int i = 0; i < 64; ++i) {
+            float a = 0.1f * i, b = 0.37f * i;
+            dirs.push_back(glm::normalize(Vec3(0.6f * std::cos(a), 0.6f * std::sin(b), 1.f)));
+        }
+    }
+};
+Setup& setup() {
+    static Setup s;
+    return s;
+}
+
+ShadingPoint point() {
+    ShadingPoint sp;
+    sp.n = sp.ng = glm::normalize(Vec3(0.1f, 0.2f, 1.f));
+    sp.tangent = Vec4(1, 0, 0, 1);
+    return sp;
+}
+
+void BM_GgxGraph(benchmark::State& state) {
+    Setup& s = setup();
+    ScratchArena arena;
+    Closure cl;
+    ShadingPoint sp = point();
+    size_t k = 0;
+    for (auto _ : state) {
+        s.mat->shade(sp, arena, cl);
+        BsdfEval e = cl.eval(s.dirs[k & 63], s.dirs[(k * 7 + 3) & 63]);
+        benchmark::DoNotOptimize(e);
+        arena.reset();
+        ++k;
+    }
+}
+
+void BM_GgxDirect(benchmark::State& state) {
+    Setup& s = setup();
+    ScratchArena arena;
+    Closure cl;
+    ShadingPoint sp = point();
+    // A hand-written material stores roughness/anisotropy/F0 and maps them per shading point, as the node does.
+    float roughness = 0.3f, anisotropy = 0.4f;
+    Color3 f0(0.95f, 0.64f, 0.54f);
+    size_t k = 0;
+    for (auto _ : state) {
+        benchmark::DoNotOptimize(sp);
+        benchmark::DoNotOptimize(roughness);
+        benchmark::DoNotOptimize(anisotropy);
+        float alpha = roughness * roughness, aspect = std::sqrt(std::max(1.f - 0.9f * anisotropy, 0.f));
+        Vec3 n = glm::normalize(sp.n);
+        sp.frame = Frame::fromNormalTangent(n, Vec3(sp.tangent));
+        cl.clear();
+        cl.add(Color3(1.f), arena.make<GgxLobe>(alpha / aspect, alpha * aspect, Fresnel::schlick(f0)));
+        BsdfEval e = cl.eval(s.dirs[k & 63], s.dirs[(k * 7 + 3) & 63]);
+        benchmark::DoNotOptimize(e);
+        arena.reset();
+        ++k;
+    }
+}
+
+BENCHMARK(BM_GgxDirect)->Repetitions(5)->ReportAggregatesOnly(true);
+BENCHMARK(BM_GgxGraph)->Repetitions(5)->ReportAggregatesOnly(true);
+
+// Captures per-benchmark median CPU time so the ratio can be printed after the run.
+class RatioReporter : public benchmark::ConsoleReporter {
+public:
+    std::map<std::string, double> medianNs;
+    void ReportRuns(const std::vector<Run>& runs) override {
+        for (auto& r : runs)
+            if (r.aggregate_name == "median") medianNs[r.run_name.function_name] = r.GetAdjustedCPUTime();
+        ConsoleReporter::ReportRuns(runs);
+    }
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    benchmark::Initialize(&argc, argv);
+    RatioReporter rep;
+    benchmark::RunSpecifiedBenchmarks(&rep);
+    if (rep.medianNs.count("BM_GgxGraph") && rep.medianNs.count("BM_GgxDirect")) {
+        double g = rep.medianNs["BM_GgxGraph"], d = rep.medianNs["BM_GgxDirect"];
+        std::printf("graph/direct GGX (shade+eval) median: %.2f ns / %.2f ns = ratio %.3f (overhead %+.1f%%, target <= +10%%)\n", g, d,
+                    g / d, (g / d - 1.0) * 100.0);
+    }
+    benchmark::Shutdown();
+    return 0;
+}

@@ -1,0 +1,111 @@
+// The GLSL prelude shared by every emitted module and by the parity harness: the documented
+// SpeculaShadingInputs/SpeculaClosure structs, the BSDF frame and the Fresnel terms (ports of
+// core/render/lobes/fresnel.h and Frame::fromNormalTangent, same operation order as the CPU).
+#include "core/codegen/glsl_sources.h"
+
+namespace specula::codegen {
+
+const std::string& glslPrelude() {
+    static const std::string s = R"GLSL(// ---- Specula prelude -------------------------------------------------------------------------
+const float SPC_PI = 3.14159265358979323846;
+const float SPC_INV_PI = 0.31830988618379067154;
+
+// Everything a node may read about the shading point. Fill it with specula_shading_inputs() in a
+// fragment shader (derivatives from dFdx/dFdy), or set the fields directly (e.g. from a ray tracer).
+// All vectors are world space; normal, geometric_normal and tangent.xyz must be unit length.
+struct SpeculaShadingInputs {
+    vec3 position;          // P
+    vec3 normal;            // N: shading normal, same side as geometric_normal
+    vec3 geometric_normal;  // Ng
+    vec4 tangent;           // xyz: tangent T, w: bitangent sign (B = sign * cross(N, T))
+    vec2 uv;                // uv0
+    vec3 dPdx, dPdy;        // screen-space derivatives of P per pixel step (CPU: ray differentials)
+    vec2 duvdx, duvdy;      // of uv
+    vec3 dNdx, dNdy;        // of N
+};
+
+// A closure evaluated for one (wo, wi) pair: f = BSDF times cos(theta_i), emission = emitted radiance.
+struct SpeculaClosure {
+    vec3 f;
+    vec3 emission;
+};
+
+SpeculaShadingInputs specula_shading_inputs(vec3 P, vec3 N, vec3 Ng, vec4 T, vec2 uv) {
+    SpeculaShadingInputs s;
+    s.position = P;
+    s.normal = normalize(N);
+    s.geometric_normal = normalize(Ng);
+    s.tangent = vec4(normalize(T.xyz), T.w < 0.0 ? -1.0 : 1.0);
+    s.uv = uv;
+    s.dPdx = dFdx(P);
+    s.dPdy = dFdy(P);
+    s.duvdx = dFdx(uv);
+    s.duvdy = dFdy(uv);
+    s.dNdx = dFdx(s.normal);
+    s.dNdy = dFdy(s.normal);
+    return s;
+}
+
+// Orthonormal frame of a BSDF from its normal and tangent inputs (CPU: graph::bsdfFrame, i.e.
+// Gram-Schmidt, falling back to Duff et al. 2017, "Building an orthonormal basis, revisited").
+void spc_frame(vec3 n, vec3 t, out vec3 T, out vec3 B, out vec3 N) {
+    float l2 = dot(n, n);
+    N = l2 > 0.0 ? n / sqrt(l2) : vec3(0.0, 0.0, 1.0);
+    vec3 tt = t - N * dot(N, t);
+    float t2 = dot(tt, tt);
+    if (t2 > 1e-12) {
+        T = tt / sqrt(t2);
+        B = cross(N, T);
+    } else {
+        float sgn = N.z >= 0.0 ? 1.0 : -1.0;
+        float a = -1.0 / (sgn + N.z);
+        float b = N.x * N.y * a;
+        T = vec3(1.0 + sgn * N.x * N.x * a, sgn * b, -sgn * N.x);
+        B = vec3(b, sgn + N.y * N.y * a, -N.y);
+    }
+}
+vec3 spc_to_local(vec3 v, vec3 T, vec3 B, vec3 N) { return vec3(dot(v, T), dot(v, B), dot(v, N)); }
+
+// Exact unpolarised dielectric reflectance, relative IOR eta (CPU: fresnelDielectric).
+float spc_fresnel_dielectric(float cosThetaI, float eta) {
+    cosThetaI = clamp(cosThetaI, -1.0, 1.0);
+    if (cosThetaI < 0.0) {
+        eta = 1.0 / eta;
+        cosThetaI = -cosThetaI;
+    }
+    float sin2T = (1.0 - cosThetaI * cosThetaI) / (eta * eta);
+    if (sin2T >= 1.0) return 1.0;
+    float cosT = sqrt(max(0.0, 1.0 - sin2T));
+    float rPar = (eta * cosThetaI - cosT) / (eta * cosThetaI + cosT);
+    float rPerp = (cosThetaI - eta * cosT) / (cosThetaI + eta * cosT);
+    return 0.5 * (rPar * rPar + rPerp * rPerp);
+}
+
+// Exact conductor reflectance for complex IOR eta + i k, one channel (CPU: fresnelConductor).
+float spc_fresnel_conductor(float cosThetaI, float eta, float k) {
+    float c2 = clamp(cosThetaI * cosThetaI, 0.0, 1.0);
+    float s2 = 1.0 - c2;
+    float eta2 = eta * eta, k2 = k * k;
+    float t0 = eta2 - k2 - s2;
+    float a2b2 = sqrt(max(0.0, t0 * t0 + 4.0 * eta2 * k2));
+    float t1 = a2b2 + c2;
+    float a = sqrt(max(0.0, 0.5 * (a2b2 + t0)));
+    float t2 = 2.0 * sqrt(c2) * a;
+    float rs = (t1 - t2) / max(t1 + t2, 1e-12);
+    float t3 = c2 * a2b2 + s2 * s2;
+    float t4 = t2 * s2;
+    float rp = rs * (t3 - t4) / max(t3 + t4, 1e-12);
+    return 0.5 * (rp + rs);
+}
+
+// Schlick's approximation with a coloured F0 (CPU: fresnelSchlick).
+vec3 spc_fresnel_schlick(float cosTheta, vec3 f0) {
+    float m = clamp(1.0 - cosTheta, 0.0, 1.0);
+    float m5 = (m * m) * (m * m) * m;
+    return f0 + (vec3(1.0) - f0) * m5;
+}
+)GLSL";
+    return s;
+}
+
+}  // namespace specula::codegen

@@ -1,0 +1,436 @@
+// Graph validation (parseGraph), compilation to a flat instruction list (Program::compile) and the
+// per-shading-point interpreter loop (Program::run).
+#include "core/graph/graph.h"
+
+#include "core/graph/graph_material.h"
+#include "core/util/error.h"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cstring>
+#include <functional>
+#include <map>
+
+namespace specula::graph {
+
+using nlohmann::json;
+
+int GraphDesc::findNode(const std::string& id) const {
+    for (size_t i = 0; i < nodes.size(); ++i)
+        if (nodes[i].id == id) return int(i);
+    return -1;
+}
+
+std::vector<int> GraphDesc::liveOrder(const std::vector<std::pair<int, int>>& roots) const {
+    std::vector<char> live(nodes.size(), 0);
+    std::vector<int> stack;
+    for (auto& r : roots) stack.push_back(r.first);
+    while (!stack.empty()) {
+        int n = stack.back();
+        stack.pop_back();
+        if (n < 0 || live[n]) continue;
+        live[n] = 1;
+        for (auto& in : nodes[n].inputs)
+            if (in.kind == InputValue::Kind::Connection) stack.push_back(in.srcNode);
+    }
+    std::vector<int> r;
+    for (int n : order)
+        if (live[n]) r.push_back(n);
+    return r;
+}
+
+namespace {
+
+std::string typeList(const std::vector<std::string>& v) {
+    std::string s;
+    for (size_t i = 0; i < v.size(); ++i) s += (i ? ", " : "") + v[i];
+    return s;
+}
+
+// Suggestion for an unknown node type: nearest registered id, or the typed variants of a family name.
+std::string suggestType(const std::string& type) {
+    auto ids = NodeRegistry::instance().ids();
+    std::string best = nearestName(type, ids);
+    if (!best.empty()) return best;
+    for (auto& id : ids)
+        if (id.rfind(type + ".", 0) == 0) return id;
+    return "";
+}
+
+// A closure output in the graph other than 'exclude', preferring one no other node consumes.
+std::string suggestClosureSource(const GraphDesc& g, int exclude) {
+    std::vector<char> consumed(g.nodes.size(), 0);
+    for (auto& n : g.nodes)
+        for (auto& in : n.inputs)
+            if (in.kind == InputValue::Kind::Connection && in.srcNode >= 0) consumed[in.srcNode] = 1;
+    std::string any;
+    for (size_t i = 0; i < g.nodes.size(); ++i) {
+        if (int(i) == exclude || !g.nodes[i].spec) continue;
+        for (auto& o : g.nodes[i].spec->outputs) {
+            if (o.type != TypeDesc::Closure) continue;
+            std::string ref = "@" + g.nodes[i].id + "." + o.name;
+            if (!consumed[i]) return ref;
+            if (any.empty()) any = ref;
+        }
+    }
+    return any;
+}
+
+bool parseNumeric(const json& v, TypeDesc t, std::array<float, 3>& out) {
+    int w = typeWidth(t);
+    if (v.is_number()) {
+        float x = v.get<float>();
+        out = {x, w > 1 ? x : 0.f, w > 2 ? x : 0.f};
+        return true;
+    }
+    if (v.is_array() && int(v.size()) == w) {
+        out = {0.f, 0.f, 0.f};
+        for (int i = 0; i < w; ++i) {
+            if (!v[i].is_number()) return false;
+            out[i] = v[i].get<float>();
+        }
+        return true;
+    }
+    return false;
+}
+
+}  // namespace
+
+GraphDesc parseGraph(const json& mat, const std::string& pointer, const ParseOptions& opt) {
+    GraphDesc g;
+    g.pointer = pointer;
+    if (!mat.is_object()) throw InputError(pointer, "a material must be a node-graph object {\"nodes\": {...}, \"output\": \"@node.port\"}");
+    static const std::vector<std::string> kMatKeys = {"nodes", "output", "doc"};
+    for (auto it = mat.begin(); it != mat.end(); ++it)
+        if (std::find(kMatKeys.begin(), kMatKeys.end(), it.key()) == kMatKeys.end())
+            throw InputError(pointer + "/" + pointerEscape(it.key()), "unknown material key '" + it.key() + "'",
+                             nearestName(it.key(), kMatKeys));
+    if (!mat.contains("nodes") || !mat["nodes"].is_object())
+        throw InputError(pointer + "/nodes", "material graph needs a \"nodes\" object", "nodes");
+    const json& nodes = mat["nodes"];
+    const std::string np = pointer + "/nodes";
+
+    // Pass 1: node ids and types.
+    std::vector<std::string> ids;
+    for (auto it = nodes.begin(); it != nodes.end(); ++it) ids.push_back(it.key());
+    for (auto it = nodes.begin(); it != nodes.end(); ++it) {
+        NodeInstance n;
+        n.id = it.key();
+        n.pointer = np + "/" + pointerEscape(n.id);
+        const json& nj = it.value();
+        if (!nj.is_object()) throw InputError(n.pointer, "a node must be an object {\"type\": ..., \"inputs\": {...}}");
+        static const std::vector<std::string> kNodeKeys = {"type", "inputs", "doc"};
+        for (auto k = nj.begin(); k != nj.end(); ++k)
+            if (std::find(kNodeKeys.begin(), kNodeKeys.end(), k.key()) == kNodeKeys.end())
+                throw InputError(n.pointer + "/" + pointerEscape(k.key()), "unknown node key '" + k.key() + "'",
+                                 nearestName(k.key(), kNodeKeys));
+        if (!nj.contains("type") || !nj["type"].is_string())
+            throw InputError(n.pointer + "/type", "node '" + n.id + "' needs a string \"type\"");
+        std::string type = nj["type"].get<std::string>();
+        n.spec = NodeRegistry::instance().find(type);
+        if (!n.spec) throw InputError(n.pointer + "/type", "unknown node type '" + type + "'", suggestType(type));
+        g.nodes.push_back(std::move(n));
+    }
+
+    // Pass 2: inputs (literals, references, defaults, bindings).
+    for (size_t ni = 0; ni < g.nodes.size(); ++ni) {
+        NodeInstance& n = g.nodes[ni];
+        const NodeSpec& spec = *n.spec;
+        const json& nj = nodes[n.id];
+        n.inputs.resize(spec.inputs.size());
+        for (size_t k = 0; k < spec.inputs.size(); ++k) {
+            const PortSpec& p = spec.inputs[k];
+            InputValue& v = n.inputs[k];
+            v.pointer = n.pointer + "/inputs/" + pointerEscape(p.name);
+            v.value = p.def;
+            v.str = p.defString;
+            if (!p.enumValues.empty()) v.enumIndex = 0;
+            v.kind = p.binding != GeomBinding::None ? InputValue::Kind::Binding : InputValue::Kind::Default;
+        }
+        if (nj.contains("inputs")) {
+            const json& ins = nj["inputs"];
+            if (!ins.is_object()) throw InputError(n.pointer + "/inputs", "\"inputs\" must be an object");
+            for (auto it = ins.begin(); it != ins.end(); ++it) {
+                std::string ip = n.pointer + "/inputs/" + pointerEscape(it.key());
+                int k = spec.inputIndex(it.key());
+                if (k < 0)
+                    throw InputError(ip, "unknown input '" + it.key() + "' of " + spec.id + " (inputs: " + typeList(spec.inputNames()) + ")",
+                                     nearestName(it.key(), spec.inputNames()));
+                const PortSpec& p = spec.inputs[k];
+                InputValue& v = n.inputs[k];
+                const json& val = it.value();
+                bool isRef = val.is_string() && !val.get<std::string>().empty() && val.get<std::string>()[0] == '@';
+                if (isRef) {
+                    if (p.type == TypeDesc::String)
+                        throw InputError(ip, "input '" + p.name + "' of " + spec.id + " takes a literal string and cannot be connected");
+                    std::string ref = val.get<std::string>().substr(1);
+                    size_t dot = ref.rfind('.');
+                    std::string srcId = dot == std::string::npos ? ref : ref.substr(0, dot);
+                    std::string srcPort = dot == std::string::npos ? "" : ref.substr(dot + 1);
+                    int src = g.findNode(srcId);
+                    if (dot == std::string::npos || srcId.empty() || srcPort.empty()) {
+                        std::string sug;
+                        if (src >= 0) sug = "@" + srcId + "." + g.nodes[src].spec->outputs.front().name;
+                        else if (!nearestName(srcId, ids).empty()) sug = "@" + nearestName(srcId, ids) + ".<output>";
+                        throw InputError(ip, "malformed reference '" + val.get<std::string>() + "': expected \"@node.output\"", sug);
+                    }
+                    if (src < 0) throw InputError(ip, "reference to unknown node '" + srcId + "'", nearestName(srcId, ids));
+                    const NodeSpec& ss = *g.nodes[src].spec;
+                    int sp = ss.outputIndex(srcPort);
+                    if (sp < 0)
+                        throw InputError(ip, "node '" + srcId + "' (" + ss.id + ") has no output '" + srcPort + "' (outputs: " + typeList(ss.outputNames()) + ")",
+                                         nearestName(srcPort, ss.outputNames()));
+                    TypeDesc st = ss.outputs[sp].type;
+                    if (st != p.type) {
+                        std::string conv = std::string("convert.") + typeName(st) + "_to_" + typeName(p.type);
+                        if (!NodeRegistry::instance().find(conv)) conv.clear();
+                        throw InputError(ip, std::string("wrong type: input '") + p.name + "' of " + spec.id + " is " + typeName(p.type) + " but '" +
+                                                 val.get<std::string>() + "' is " + typeName(st) +
+                                                 " (connections must match exactly; insert an explicit convert node)",
+                                         conv);
+                    }
+                    v.kind = InputValue::Kind::Connection;
+                    v.srcNode = src;
+                    v.srcPort = sp;
+                    continue;
+                }
+                if (p.type == TypeDesc::Closure)
+                    throw InputError(ip, "input '" + p.name + "' of " + spec.id + " is a closure and must be connected (\"@node.output\")",
+                                     suggestClosureSource(g, int(ni)));
+                if (p.type == TypeDesc::String) {
+                    if (!val.is_string()) throw InputError(ip, "wrong type: input '" + p.name + "' of " + spec.id + " is a string");
+                    v.str = val.get<std::string>();
+                    if (!p.enumValues.empty()) {
+                        auto f = std::find(p.enumValues.begin(), p.enumValues.end(), v.str);
+                        if (f == p.enumValues.end())
+                            throw InputError(ip, "invalid value '" + v.str + "' for '" + p.name + "' (one of: " + typeList(p.enumValues) + ")",
+                                             nearestName(v.str, p.enumValues));
+                        v.enumIndex = int(f - p.enumValues.begin());
+                    }
+                    v.kind = InputValue::Kind::Literal;
+                    continue;
+                }
+                if (!parseNumeric(val, p.type, v.value)) {
+                    int w = typeWidth(p.type);
+                    std::string want = w == 1 ? "a number" : "a number or an array of " + std::to_string(w) + " numbers";
+                    std::string sug;
+                    if (val.is_string()) sug = "@" + val.get<std::string>();
+                    throw InputError(ip, std::string("wrong type: input '") + p.name + "' of " + spec.id + " is " + typeName(p.type) +
+                                             ", expected " + want + " or \"@node.output\"",
+                                     sug.size() > 1 && val.get<std::string>().find('.') != std::string::npos ? sug : "");
+                }
+                v.kind = InputValue::Kind::Literal;
+            }
+        }
+    }
+
+    // Pass 3: required inputs.
+    for (size_t ni = 0; ni < g.nodes.size(); ++ni) {
+        NodeInstance& n = g.nodes[ni];
+        for (size_t k = 0; k < n.spec->inputs.size(); ++k) {
+            const PortSpec& p = n.spec->inputs[k];
+            const InputValue& v = n.inputs[k];
+            if (!p.required || v.kind == InputValue::Kind::Connection || v.kind == InputValue::Kind::Literal) continue;
+            std::string sug;
+            if (p.type == TypeDesc::Closure) sug = suggestClosureSource(g, int(ni));
+            throw InputError(v.pointer, "required input '" + p.name + "' of " + n.spec->id + " (node '" + n.id + "') is not " +
+                                            (p.type == TypeDesc::String ? "given" : "connected"),
+                             sug);
+        }
+    }
+
+    // Pass 4: topological order + cycle detection (DFS in id order: deterministic).
+    std::vector<int> state(g.nodes.size(), 0);  // 0 new, 1 on stack, 2 done
+    std::vector<int> path;
+    std::function<void(int)> visit = [&](int n) {
+        state[n] = 1;
+        path.push_back(n);
+        for (auto& in : g.nodes[n].inputs) {
+            if (in.kind != InputValue::Kind::Connection) continue;
+            if (state[in.srcNode] == 1) {
+                std::string cyc;
+                auto it = std::find(path.begin(), path.end(), in.srcNode);
+                for (; it != path.end(); ++it) cyc += g.nodes[*it].id + " -> ";
+                cyc += g.nodes[in.srcNode].id;
+                throw InputError(in.pointer, "cycle in the node graph: " + cyc + " (a graph must be acyclic; remove this connection)",
+                                 "");
+            }
+            if (state[in.srcNode] == 0) visit(in.srcNode);
+        }
+        path.pop_back();
+        state[n] = 2;
+        g.order.push_back(n);
+    };
+    for (size_t i = 0; i < g.nodes.size(); ++i)
+        if (state[i] == 0) visit(int(i));
+
+    // Output.
+    if (!mat.contains("output"))
+        throw InputError(pointer, "material graph has no \"output\"", opt.requireClosureOutput ? suggestClosureSource(g, -1) : "output");
+    const json& out = mat["output"];
+    std::string op = pointer + "/output";
+    if (!out.is_string() || out.get<std::string>().size() < 2 || out.get<std::string>()[0] != '@')
+        throw InputError(op, "\"output\" must be a reference \"@node.output\"", suggestClosureSource(g, -1));
+    std::string ref = out.get<std::string>().substr(1);
+    size_t dot = ref.rfind('.');
+    if (dot == std::string::npos) {
+        int src = g.findNode(ref);
+        throw InputError(op, "malformed reference '" + out.get<std::string>() + "': expected \"@node.output\"",
+                         src >= 0 ? "@" + ref + "." + g.nodes[src].spec->outputs.front().name : nearestName(ref, ids));
+    }
+    g.outputNode = g.findNode(ref.substr(0, dot));
+    if (g.outputNode < 0) throw InputError(op, "reference to unknown node '" + ref.substr(0, dot) + "'", nearestName(ref.substr(0, dot), ids));
+    const NodeSpec& os = *g.nodes[g.outputNode].spec;
+    g.outputPort = os.outputIndex(ref.substr(dot + 1));
+    if (g.outputPort < 0)
+        throw InputError(op, "node '" + ref.substr(0, dot) + "' (" + os.id + ") has no output '" + ref.substr(dot + 1) + "'",
+                         nearestName(ref.substr(dot + 1), os.outputNames()));
+    if (opt.requireClosureOutput && os.outputs[g.outputPort].type != TypeDesc::Closure)
+        throw InputError(op, "material output must be a closure, but '" + out.get<std::string>() + "' is " +
+                                 typeName(os.outputs[g.outputPort].type),
+                         suggestClosureSource(g, -1));
+    return g;
+}
+
+// ---- compilation ---------------------------------------------------------------------------------
+
+Program Program::compile(const GraphDesc& g, const std::vector<std::pair<int, int>>& roots, const GraphLoadContext* load) {
+    Program prog;
+    std::vector<int> live = g.liveOrder(roots);
+    std::vector<std::vector<uint16_t>> outRegs(g.nodes.size());
+    std::vector<char> constNode(g.nodes.size(), 0);
+    std::map<GeomBinding, uint16_t> bindingRegs;
+    auto alloc = [&](int w) {
+        uint16_t r = uint16_t(prog.tmpl_.size());
+        for (int i = 0; i < w; ++i) prog.tmpl_.push_back(0.f);
+        return r;
+    };
+    std::vector<std::pair<int, uint16_t>> closureOuts;  // (node, register) of kept closure outputs
+
+    for (int ni : live) {
+        const NodeInstance& n = g.nodes[ni];
+        const NodeSpec& spec = *n.spec;
+        Instr ins;
+        std::fill(std::begin(ins.in), std::end(ins.in), kNoRegister);
+        std::fill(std::begin(ins.out), std::end(ins.out), kNoRegister);
+        ins.fn = spec.cpu;
+        bool allConst = true;
+        std::vector<std::string> strings(spec.inputs.size());
+        for (size_t k = 0; k < spec.inputs.size(); ++k) {
+            const PortSpec& p = spec.inputs[k];
+            const InputValue& v = n.inputs[k];
+            if (p.type == TypeDesc::String) {
+                strings[k] = v.str;
+                if (!p.enumValues.empty()) ins.in[k] = uint16_t(std::max(v.enumIndex, 0));
+                continue;
+            }
+            switch (v.kind) {
+                case InputValue::Kind::Connection:
+                    ins.in[k] = outRegs[v.srcNode][v.srcPort];
+                    if (!constNode[v.srcNode]) allConst = false;
+                    break;
+                case InputValue::Kind::Binding: {
+                    auto it = bindingRegs.find(p.binding);
+                    if (it == bindingRegs.end()) {
+                        uint16_t r = alloc(typeWidth(bindingType(p.binding)));
+                        it = bindingRegs.emplace(p.binding, r).first;
+                        prog.prologue_.push_back({p.binding, r});
+                    }
+                    ins.in[k] = it->second;
+                    allConst = false;
+                    break;
+                }
+                case InputValue::Kind::Literal:
+                case InputValue::Kind::Default: {
+                    int w = typeWidth(p.type);
+                    uint16_t r = alloc(w);
+                    for (int c = 0; c < w; ++c) prog.tmpl_[r + c] = v.value[c];
+                    ins.in[k] = r;
+                    break;
+                }
+            }
+        }
+        bool closureOut = false;
+        for (size_t k = 0; k < spec.outputs.size(); ++k) {
+            ins.out[k] = alloc(typeWidth(spec.outputs[k].type));
+            outRegs[ni].push_back(ins.out[k]);
+            if (spec.outputs[k].type == TypeDesc::Closure) closureOut = true;
+        }
+        if (spec.has(kPure) && allConst && !closureOut && !spec.prepare) {
+            // Constant folding: run the node once now; its outputs become template constants.
+            EvalContext ctx;
+            ctx.r = prog.tmpl_.data();
+            spec.cpu(ctx, ins);
+            constNode[ni] = 1;
+            ++prog.folded_;
+            continue;
+        }
+        if (spec.prepare) {
+            PrepareContext pc;
+            pc.strings = &strings;
+            pc.load = load;
+            for (auto& v : n.inputs) pc.pointers.push_back(v.pointer);
+            auto d = spec.prepare(pc);
+            ins.data = d.get();
+            prog.data_.push_back(std::move(d));
+        }
+        for (size_t k = 0; k < spec.outputs.size(); ++k)
+            if (spec.outputs[k].type == TypeDesc::Closure) {
+                prog.tmpl_[ins.out[k]] = float(prog.slots_);
+                closureOuts.push_back({ni, ins.out[k]});
+                ++prog.slots_;
+            }
+        if (spec.has(kEmissive)) prog.emissive_ = true;
+        prog.code_.push_back(ins);
+    }
+    for (auto& r : roots) prog.rootRegs_.push_back(outRegs[r.first][r.second]);
+    if (!roots.empty() && g.nodes[roots[0].first].spec->outputs[roots[0].second].type == TypeDesc::Closure)
+        prog.outSlot_ = int(prog.tmpl_[prog.rootRegs_[0]]);
+    return prog;
+}
+
+void Program::execute(ShadingPoint& sp, ScratchArena& arena, float* r, Closure** cl, Color3* em, Closure* out,
+                      Color3* emission) const {
+    std::memcpy(r, tmpl_.data(), tmpl_.size() * sizeof(float));
+    for (size_t s = 0; s < slots_; ++s) {
+        em[s] = Color3(0.f);
+        if (out && int(s) == outSlot_)
+            cl[s] = out;
+        else
+            cl[s] = new (arena.allocate(sizeof(Closure), alignof(Closure))) Closure();
+    }
+    for (const Load& l : prologue_) loadBinding(l.binding, sp, r + l.reg);
+    EvalContext ctx;
+    ctx.r = r;
+    ctx.sp = &sp;
+    ctx.arena = &arena;
+    ctx.closures = cl;
+    ctx.emission = em;
+    for (const Instr& ins : code_) ins.fn(ctx, ins);
+    if (ctx.frameSet) sp.frame = ctx.frame;
+    if (emission) *emission = outSlot_ >= 0 ? em[outSlot_] : Color3(0.f);
+}
+
+const float* Program::run(ShadingPoint& sp, ScratchArena& arena, Closure* out, Color3* emission) const {
+    float* r = static_cast<float*>(arena.allocate(tmpl_.size() * sizeof(float) + 4, 16));
+    size_t n = std::max<size_t>(slots_, 1);
+    auto** cl = static_cast<Closure**>(arena.allocate(n * sizeof(Closure*), alignof(Closure*)));
+    auto* em = static_cast<Color3*>(arena.allocate(n * sizeof(Color3), alignof(Color3)));
+    execute(sp, arena, r, cl, em, out, emission);
+    return r;
+}
+
+void Program::shade(ShadingPoint& sp, ScratchArena& arena, Closure* out, Color3* emission) const {
+    constexpr size_t kStackRegs = 256, kStackSlots = 16;
+    if (tmpl_.size() > kStackRegs || slots_ > kStackSlots) {
+        run(sp, arena, out, emission);
+        return;
+    }
+    alignas(16) float r[kStackRegs];
+    Closure* cl[kStackSlots];
+    Color3 em[kStackSlots];
+    execute(sp, arena, r, cl, em, out, emission);
+}
+
+}  // namespace specula::graph

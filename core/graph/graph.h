@@ -1,0 +1,92 @@
+// Graph JSON -> validated GraphDesc (types, references, cycles, with JSON pointers in every error)
+// -> Program: a flat instruction list over a float register file, constant-folded and pruned.
+#pragma once
+
+#include "core/graph/node_spec.h"
+#include "core/render/bsdf.h"
+#include "core/render/shading.h"
+
+#include <nlohmann/json_fwd.hpp>
+
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace specula::graph {
+
+// How one input port of a node instance gets its value.
+struct InputValue {
+    enum class Kind : uint8_t { Default, Literal, Connection, Binding };
+    Kind kind = Kind::Default;
+    std::array<float, 3> value{0.f, 0.f, 0.f};  // numeric literal/default
+    std::string str;                            // string literal/default
+    int enumIndex = -1;                         // for enum string ports
+    int srcNode = -1, srcPort = -1;             // connection source (index into GraphDesc::nodes, output port)
+    std::string pointer;                        // JSON pointer of the value (or of where it would go)
+};
+
+struct NodeInstance {
+    std::string id;
+    const NodeSpec* spec = nullptr;
+    std::vector<InputValue> inputs;  // one per spec->inputs
+    std::string pointer;             // JSON pointer of the node object
+};
+
+struct GraphDesc {
+    std::string pointer;               // JSON pointer of the material object
+    std::vector<NodeInstance> nodes;   // sorted by id
+    std::vector<int> order;            // topological order (sources first), deterministic
+    int outputNode = -1, outputPort = -1;
+    int findNode(const std::string& id) const;
+    // Nodes reachable from the given (node, port) roots, in topological order (dead nodes pruned).
+    std::vector<int> liveOrder(const std::vector<std::pair<int, int>>& roots) const;
+};
+
+struct ParseOptions {
+    bool requireClosureOutput = true;  // materials: yes; tests/tools may compile pattern graphs
+};
+
+// Validates a graph {"nodes": {...}, "output": "@node.port"}; throws specula::InputError naming the
+// JSON pointer (pointer = location of 'material') and a nearest-name suggestion where one exists.
+GraphDesc parseGraph(const nlohmann::json& material, const std::string& pointer, const ParseOptions& opt = {});
+
+// Compiled, immutable, thread-safe evaluation program.
+class Program {
+public:
+    // roots[0] is the material output; more roots keep extra outputs alive (tests, tools).
+    static Program compile(const GraphDesc& g, const std::vector<std::pair<int, int>>& roots,
+                           const GraphLoadContext* load);
+
+    // Runs the program at sp. If 'out' is given it receives the closure of roots[0] (closure-typed);
+    // 'emission' receives that closure's emission. sp.frame is set to the first BSDF's frame.
+    // Returns the register file (valid until the arena is reset).
+    const float* run(ShadingPoint& sp, ScratchArena& arena, Closure* out, Color3* emission) const;
+    // Same as run() for the renderer's hot path: registers and the closure pool live on the stack
+    // when small (no arena traffic besides the lobes).
+    void shade(ShadingPoint& sp, ScratchArena& arena, Closure* out, Color3* emission) const;
+
+    uint16_t rootRegister(size_t i) const { return rootRegs_[i]; }
+    size_t instructionCount() const { return code_.size(); }
+    size_t foldedCount() const { return folded_; }
+    size_t registerCount() const { return tmpl_.size(); }
+    size_t closureSlots() const { return slots_; }
+    bool emissive() const { return emissive_; }
+
+private:
+    void execute(ShadingPoint& sp, ScratchArena& arena, float* r, Closure** cl, Color3* em, Closure* out, Color3* emission) const;
+    struct Load {
+        GeomBinding binding;
+        uint16_t reg;
+    };
+    std::vector<float> tmpl_;
+    std::vector<Instr> code_;
+    std::vector<Load> prologue_;
+    std::vector<std::shared_ptr<const void>> data_;
+    std::vector<uint16_t> rootRegs_;
+    int outSlot_ = -1;
+    size_t slots_ = 0, folded_ = 0;
+    bool emissive_ = false;
+};
+
+}  // namespace specula::graph

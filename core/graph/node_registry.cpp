@@ -1,0 +1,153 @@
+// NodeRegistry, NodeSpec helpers and the geometric default bindings.
+#include "core/graph/node_spec.h"
+
+#include "core/codegen/glsl_sources.h"
+#include "core/render/shading.h"
+
+#include <cstdio>
+#include <cstdlib>
+
+namespace specula::graph {
+
+const char* bindingName(GeomBinding b) {
+    switch (b) {
+        case GeomBinding::None: return "";
+        case GeomBinding::UV: return "uv0";
+        case GeomBinding::DUVDX: return "duv0dx";
+        case GeomBinding::DUVDY: return "duv0dy";
+        case GeomBinding::P: return "P";
+        case GeomBinding::N: return "N";
+        case GeomBinding::Ng: return "Ng";
+        case GeomBinding::T: return "T";
+        case GeomBinding::TSign: return "Tsign";
+        case GeomBinding::NdotV: return "NdotV";
+    }
+    return "";
+}
+
+TypeDesc bindingType(GeomBinding b) {
+    switch (b) {
+        case GeomBinding::UV:
+        case GeomBinding::DUVDX:
+        case GeomBinding::DUVDY: return TypeDesc::Vec2;
+        case GeomBinding::P:
+        case GeomBinding::T: return TypeDesc::Vector3;
+        case GeomBinding::N:
+        case GeomBinding::Ng: return TypeDesc::Normal3;
+        case GeomBinding::TSign:
+        case GeomBinding::NdotV:
+        case GeomBinding::None: return TypeDesc::Float;
+    }
+    return TypeDesc::Float;
+}
+
+const char* bindingGlsl(GeomBinding b) {
+    switch (b) {
+        case GeomBinding::None: return "";
+        case GeomBinding::UV: return "s.uv";
+        case GeomBinding::DUVDX: return "s.duvdx";
+        case GeomBinding::DUVDY: return "s.duvdy";
+        case GeomBinding::P: return "s.position";
+        case GeomBinding::N: return "s.normal";
+        case GeomBinding::Ng: return "s.geometric_normal";
+        case GeomBinding::T: return "s.tangent.xyz";
+        case GeomBinding::TSign: return "s.tangent.w";
+        case GeomBinding::NdotV: return "dot(s.normal, wo)";
+    }
+    return "";
+}
+
+void loadBinding(GeomBinding b, const ShadingPoint& sp, float* d) {
+    auto v3 = [d](const Vec3& v) { d[0] = v.x, d[1] = v.y, d[2] = v.z; };
+    auto v2 = [d](const Vec2& v) { d[0] = v.x, d[1] = v.y; };
+    switch (b) {
+        case GeomBinding::None: break;
+        case GeomBinding::UV: v2(sp.uv); break;
+        case GeomBinding::DUVDX: v2(sp.duvdx); break;
+        case GeomBinding::DUVDY: v2(sp.duvdy); break;
+        case GeomBinding::P: v3(sp.p); break;
+        case GeomBinding::N: v3(sp.n); break;
+        case GeomBinding::Ng: v3(sp.ng); break;
+        case GeomBinding::T: v3(Vec3(sp.tangent)); break;
+        case GeomBinding::TSign: d[0] = sp.tangent.w; break;
+        case GeomBinding::NdotV: d[0] = glm::dot(sp.n, sp.wo); break;
+    }
+}
+
+int NodeSpec::inputIndex(const std::string& n) const {
+    for (size_t i = 0; i < inputs.size(); ++i)
+        if (inputs[i].name == n) return int(i);
+    return -1;
+}
+int NodeSpec::outputIndex(const std::string& n) const {
+    for (size_t i = 0; i < outputs.size(); ++i)
+        if (outputs[i].name == n) return int(i);
+    return -1;
+}
+std::vector<std::string> NodeSpec::inputNames() const {
+    std::vector<std::string> r;
+    for (auto& p : inputs) r.push_back(p.name);
+    return r;
+}
+std::vector<std::string> NodeSpec::outputNames() const {
+    std::vector<std::string> r;
+    for (auto& p : outputs) r.push_back(p.name);
+    return r;
+}
+
+const std::string* NodeSpec::glslSource() const { return codegen::embeddedGlsl(glslFile); }
+
+std::string NodeSpec::glslPrototype() const {
+    std::string s = "void " + glslFunction + "(";
+    bool first = true;
+    auto arg = [&](const std::string& a) {
+        if (!first) s += ", ";
+        s += a;
+        first = false;
+    };
+    if (has(kGlslShading)) arg("SpeculaShadingInputs");
+    if (has(kGlslDirections)) {
+        arg("vec3");
+        arg("vec3");
+    }
+    if (has(kGlslTexture)) arg("sampler2D");
+    for (auto& p : inputs) {
+        if (p.type == TypeDesc::String && p.enumValues.empty()) continue;  // plain strings stay on the host
+        arg(glslTypeName(p.type));
+    }
+    for (auto& p : outputs) arg(std::string("out ") + glslTypeName(p.type));
+    return s + ")";
+}
+
+NodeRegistry& NodeRegistry::instance() {
+    static NodeRegistry r;
+    return r;
+}
+
+void NodeRegistry::add(NodeSpec spec) {
+    if (specs_.count(spec.id) || spec.inputs.size() > size_t(kMaxInputs) || spec.outputs.size() > size_t(kMaxOutputs)) {
+        std::fprintf(stderr, "specula: invalid or duplicate node registration '%s'\n", spec.id.c_str());
+        std::abort();
+    }
+    std::string id = spec.id;
+    specs_[id] = std::make_unique<NodeSpec>(std::move(spec));
+}
+
+const NodeSpec* NodeRegistry::find(const std::string& id) const {
+    auto it = specs_.find(id);
+    return it == specs_.end() ? nullptr : it->second.get();
+}
+
+std::vector<std::string> NodeRegistry::ids() const {
+    std::vector<std::string> r;
+    for (auto& [k, v] : specs_) r.push_back(k);
+    return r;
+}
+
+std::vector<const NodeSpec*> NodeRegistry::all() const {
+    std::vector<const NodeSpec*> r;
+    for (auto& [k, v] : specs_) r.push_back(v.get());
+    return r;
+}
+
+}  // namespace specula::graph

@@ -1,0 +1,220 @@
+// Node declarations: PortSpec/NodeSpec (declared once, in C++, per node file), the flat CPU
+// instruction format the compiled graph runs, and the self-registering NodeRegistry.
+#pragma once
+
+#include "core/graph/types.h"
+#include "core/math/math.h"
+
+#include <array>
+#include <cstdint>
+#include <limits>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace specula {
+struct ShadingPoint;
+class ScratchArena;
+class Closure;
+struct GraphLoadContext;
+}  // namespace specula
+
+namespace specula::graph {
+
+// Default geometric source of an unconnected input (MaterialX-style default geometric binding).
+// CPU reads the ShadingPoint, GLSL the SpeculaShadingInputs struct (docs/graph-format.md).
+enum class GeomBinding : uint8_t {
+    None,
+    UV,      // vec2    sp.uv           s.uv
+    DUVDX,   // vec2    sp.duvdx        s.duvdx
+    DUVDY,   // vec2    sp.duvdy        s.duvdy
+    P,       // vector3 sp.p            s.position
+    N,       // normal3 sp.n            s.normal
+    Ng,      // normal3 sp.ng           s.geometric_normal
+    T,       // vector3 sp.tangent.xyz  s.tangent.xyz
+    TSign,   // float   sp.tangent.w    s.tangent.w
+    NdotV,   // float   dot(sp.n, sp.wo)  dot(s.normal, wo)
+};
+const char* bindingName(GeomBinding b);
+TypeDesc bindingType(GeomBinding b);
+const char* bindingGlsl(GeomBinding b);
+// Writes the binding's value (typeWidth(bindingType(b)) floats) for a shading point.
+void loadBinding(GeomBinding b, const ShadingPoint& sp, float* dst);
+
+struct PortSpec {
+    std::string name;
+    TypeDesc type = TypeDesc::Float;
+    std::array<float, 3> def{0.f, 0.f, 0.f};   // numeric default (first typeWidth entries)
+    std::string defString;                      // default of a string port ("" + required = must be given)
+    std::vector<std::string> enumValues;        // non-empty: string port restricted to these (GLSL gets the index)
+    float minValue = -std::numeric_limits<float>::infinity();  // documented soft range; the parity suite
+    float maxValue = std::numeric_limits<float>::infinity();   // samples inputs inside it
+    std::string doc;
+    GeomBinding binding = GeomBinding::None;
+    bool required = false;  // no default: must be connected (closures) or given (strings)
+
+    // Fluent construction used by the node files.
+    static PortSpec make(std::string n, TypeDesc t, std::array<float, 3> d, std::string doc_) {
+        PortSpec p;
+        p.name = std::move(n);
+        p.type = t;
+        p.def = d;
+        p.doc = std::move(doc_);
+        return p;
+    }
+    static PortSpec f(std::string n, float d, std::string doc_) { return make(std::move(n), TypeDesc::Float, {d, 0, 0}, std::move(doc_)); }
+    static PortSpec v2(std::string n, Vec2 d, std::string doc_) { return make(std::move(n), TypeDesc::Vec2, {d.x, d.y, 0}, std::move(doc_)); }
+    static PortSpec c3(std::string n, Vec3 d, std::string doc_) { return make(std::move(n), TypeDesc::Color3, {d.x, d.y, d.z}, std::move(doc_)); }
+    static PortSpec v3(std::string n, Vec3 d, std::string doc_) { return make(std::move(n), TypeDesc::Vector3, {d.x, d.y, d.z}, std::move(doc_)); }
+    static PortSpec n3(std::string n, Vec3 d, std::string doc_) { return make(std::move(n), TypeDesc::Normal3, {d.x, d.y, d.z}, std::move(doc_)); }
+    static PortSpec closure(std::string n, std::string doc_) {
+        PortSpec p = make(std::move(n), TypeDesc::Closure, {0, 0, 0}, std::move(doc_));
+        p.required = true;
+        return p;
+    }
+    static PortSpec str(std::string n, std::string doc_) {
+        PortSpec p = make(std::move(n), TypeDesc::String, {0, 0, 0}, std::move(doc_));
+        p.required = true;
+        return p;
+    }
+    static PortSpec choice(std::string n, std::vector<std::string> values, std::string doc_) {
+        PortSpec p = make(std::move(n), TypeDesc::String, {0, 0, 0}, std::move(doc_));
+        p.defString = values.front();
+        p.enumValues = std::move(values);
+        return p;
+    }
+    static PortSpec out(std::string n, TypeDesc t, std::string doc_) { return make(std::move(n), t, {0, 0, 0}, std::move(doc_)); }
+    PortSpec&& range(float lo, float hi) && {
+        minValue = lo;
+        maxValue = hi;
+        return std::move(*this);
+    }
+    PortSpec&& bind(GeomBinding b) && {
+        binding = b;
+        return std::move(*this);
+    }
+};
+
+struct Instr;
+struct EvalContext;
+// CPU entry of a node: reads its input registers, writes its output registers.
+using CpuFn = void (*)(EvalContext& ctx, const Instr& ins);
+
+// Per-instance preparation (string/enum literals -> opaque data such as a texture handle).
+struct PrepareContext {
+    const std::vector<std::string>* strings;  // per input port; "" for non-string ports
+    const GraphLoadContext* load;             // may be null (e.g. codegen-only use)
+    std::vector<std::string> pointers;        // JSON pointer per input port (for errors)
+};
+using PrepareFn = std::shared_ptr<const void> (*)(const PrepareContext& ctx);
+
+enum NodeFlags : uint32_t {
+    kPure = 1u << 0,              // outputs depend only on inputs: folded when all inputs are constant
+    kNeedsDerivatives = 1u << 1,  // reads screen-space differentials (sp.dpdx..., GLSL dFdx/dFdy)
+    kEmissive = 1u << 2,          // can produce emission
+    kGlslShading = 1u << 3,       // GLSL function takes SpeculaShadingInputs s first
+    kGlslDirections = 1u << 4,    // GLSL function takes (vec3 wo, vec3 wi) world directions
+    kGlslTexture = 1u << 5,       // GLSL function takes a sampler2D (declared by the emitter)
+};
+
+struct NodeSpec {
+    std::string id;        // stable, e.g. "bsdf.ggx"
+    int version = 1;
+    std::string category;  // family: constant, geometry, texture, math, convert, fresnel, bsdf, closure
+    std::string doc;
+    std::vector<PortSpec> inputs, outputs;
+    uint32_t flags = 0;
+    CpuFn cpu = nullptr;
+    PrepareFn prepare = nullptr;
+    std::string glslFunction;  // GLSL function name (overloads allowed across typed variants)
+    std::string glslFile;      // path of the .glsl relative to nodes/ (embedded into the binary)
+    float parityTolerance = 1e-4f;  // max relative error CPU vs GLSL (docs/nodes.md)
+    std::string parityNote;         // why a looser tolerance is needed
+
+    bool has(uint32_t f) const { return (flags & f) != 0; }
+    int inputIndex(const std::string& n) const;
+    int outputIndex(const std::string& n) const;
+    std::vector<std::string> inputNames() const;
+    std::vector<std::string> outputNames() const;
+    // GLSL source text of glslFile (embedded), or nullptr if missing.
+    const std::string* glslSource() const;
+    // The GLSL prototype derived from the ports: "void fn(SpeculaShadingInputs, vec3, vec3, float, out vec3)".
+    std::string glslPrototype() const;
+};
+
+// ---- flat instruction list ---------------------------------------------------------------------
+constexpr int kMaxInputs = 12;
+constexpr int kMaxOutputs = 4;
+constexpr uint16_t kNoRegister = 0xFFFF;
+
+// One compiled node: entry point + register offsets. For string ports in[k] is unused (kNoRegister),
+// for enum ports in[k] holds the chosen enum index directly.
+struct Instr {
+    CpuFn fn = nullptr;
+    const void* data = nullptr;  // prepared per-instance data (PrepareFn), owned by the program
+    uint16_t in[kMaxInputs];
+    uint16_t out[kMaxOutputs];
+};
+
+// Per-evaluation state the instruction functions see.
+struct EvalContext {
+    float* r = nullptr;                 // register file
+    const ShadingPoint* sp = nullptr;   // null while constant folding
+    ScratchArena* arena = nullptr;      // lobes are allocated here
+    Closure* const* closures = nullptr; // closure pool: a closure register holds an index into it
+    Color3* emission = nullptr;         // emission per closure pool entry
+    Frame frame;                        // shading frame chosen by the first BSDF node
+    bool frameSet = false;
+};
+
+// ---- registry ------------------------------------------------------------------------------------
+class NodeRegistry {
+public:
+    static NodeRegistry& instance();
+    void add(NodeSpec spec);  // aborts on duplicate id (a programming error, found by every test)
+    const NodeSpec* find(const std::string& id) const;
+    std::vector<std::string> ids() const;           // sorted
+    std::vector<const NodeSpec*> all() const;       // sorted by id
+
+private:
+    std::map<std::string, std::unique_ptr<NodeSpec>> specs_;
+};
+
+struct NodeRegistrar {
+    explicit NodeRegistrar(void (*fn)(NodeRegistry&)) { fn(NodeRegistry::instance()); }
+};
+
+#define SPECULA_NODE_CONCAT2(a, b) a##b
+#define SPECULA_NODE_CONCAT(a, b) SPECULA_NODE_CONCAT2(a, b)
+// One per node file: SPECULA_REGISTER_NODES(fn) with fn(NodeRegistry&) adding its spec(s).
+#define SPECULA_REGISTER_NODES(fn) \
+    static ::specula::graph::NodeRegistrar SPECULA_NODE_CONCAT(specula_node_registrar_, __LINE__)(fn)
+
+// ---- helpers for node CPU code ---------------------------------------------------------------------
+inline float inF(const EvalContext& c, const Instr& i, int k) { return c.r[i.in[k]]; }
+inline Vec2 inV2(const EvalContext& c, const Instr& i, int k) {
+    const float* p = c.r + i.in[k];
+    return {p[0], p[1]};
+}
+inline Vec3 inV3(const EvalContext& c, const Instr& i, int k) {
+    const float* p = c.r + i.in[k];
+    return {p[0], p[1], p[2]};
+}
+inline int inEnum(const Instr& i, int k) { return int(i.in[k]); }
+inline int inClosure(const EvalContext& c, const Instr& i, int k) { return int(c.r[i.in[k]]); }
+inline int outClosure(const EvalContext& c, const Instr& i, int k) { return int(c.r[i.out[k]]); }
+inline void outF(EvalContext& c, const Instr& i, int k, float v) { c.r[i.out[k]] = v; }
+inline void outV2(EvalContext& c, const Instr& i, int k, Vec2 v) {
+    float* p = c.r + i.out[k];
+    p[0] = v.x;
+    p[1] = v.y;
+}
+inline void outV3(EvalContext& c, const Instr& i, int k, Vec3 v) {
+    float* p = c.r + i.out[k];
+    p[0] = v.x;
+    p[1] = v.y;
+    p[2] = v.z;
+}
+
+}  // namespace specula::graph

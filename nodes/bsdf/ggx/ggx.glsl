@@ -1,0 +1,40 @@
+// bsdf.ggx: f·cos = weight · F(wo·h) D(h) G2(wo, wi) / (4 wo.z), the GLSL twin of GgxLobe::eval.
+// D: anisotropic GGX (Walter et al. 2007, Eq. 33); Λ: Heitz 2014, Eq. 86; G2 = 1/(1 + Λo + Λi) (Eq. 99).
+float spc_ggx_ndf(vec3 h, float ax, float ay) {
+    if (h.z <= 0.0) return 0.0;
+    float hx = h.x / ax, hy = h.y / ay;
+    float e = hx * hx + hy * hy + h.z * h.z;
+    return 1.0 / (SPC_PI * ax * ay * e * e);
+}
+float spc_ggx_lambda(vec3 w, float ax, float ay) {
+    float z2 = w.z * w.z;
+    if (z2 <= 0.0) return 1e30;
+    float px = ax * w.x, py = ay * w.y;
+    float a2tan2 = (px * px + py * py) / z2;
+    return 0.5 * (-1.0 + sqrt(1.0 + a2tan2));
+}
+void spc_bsdf_ggx(vec3 wo, vec3 wi, vec3 weight, float roughness, float anisotropy, int fresnel, vec3 f0, float ior,
+                  vec3 eta, vec3 k, vec3 normal, vec3 tangent, out SpeculaClosure bsdf) {
+    bsdf.f = vec3(0.0);
+    bsdf.emission = vec3(0.0);
+    float alpha = roughness * roughness;
+    float aspect = sqrt(max(1.0 - 0.9 * anisotropy, 0.0));
+    float ax = max(alpha / aspect, 1e-4), ay = max(alpha * aspect, 1e-4);
+    vec3 T, B, N;
+    spc_frame(normal, tangent, T, B, N);
+    vec3 o = spc_to_local(wo, T, B, N);
+    vec3 i = spc_to_local(wi, T, B, N);
+    if (o.z <= 0.0 || i.z <= 0.0) return;
+    vec3 h = o + i;
+    float len = sqrt(dot(h, h));
+    if (len == 0.0) return;
+    h /= len;
+    float d = spc_ggx_ndf(h, ax, ay);
+    float g = 1.0 / (1.0 + spc_ggx_lambda(o, ax, ay) + spc_ggx_lambda(i, ax, ay));
+    float c = dot(o, h);
+    vec3 F = vec3(1.0);
+    if (fresnel == 0) F = spc_fresnel_schlick(c, f0);
+    else if (fresnel == 1) F = vec3(spc_fresnel_dielectric(c, ior));
+    else if (fresnel == 2) F = vec3(spc_fresnel_conductor(c, eta.x, k.x), spc_fresnel_conductor(c, eta.y, k.y), spc_fresnel_conductor(c, eta.z, k.z));
+    bsdf.f = weight * (F * (d * g / (4.0 * o.z)));
+}

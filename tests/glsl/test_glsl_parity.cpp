@@ -1,0 +1,502 @@
+// Drift guard (dynamic): for every registered node, run its GLSL on Mesa llvmpipe through headless
+// EGL over a grid of 1024 random inputs (one RGBA32F row per sample) and compare with the CPU
+// evaluator on the same float inputs: max relative error |gpu − cpu| / max(|cpu|, 1e-3) must stay within
+// NodeSpec::parityTolerance (1e-4 unless documented in docs/nodes.md). Also checks an emitted
+// material module end to end (uniform block, bindings, specula_eval) and dFdx-based derivatives.
+#define GL_GLEXT_PROTOTYPES 1
+#include "core/codegen/glsl_emitter.h"
+#include "core/codegen/glsl_sources.h"
+#include "core/color/color_config.h"
+#include "core/graph/graph_material.h"
+#include "core/texture/texture_store.h"
+#include "glsl_harness.h"
+
+#include <GL/gl.h>
+#include <GL/glext.h>
+#include <OpenImageIO/imageio.h>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+using namespace specula;
+using namespace specula::graph;
+using nlohmann::json;
+
+namespace {
+
+constexpr int kSide = 32, kSamples = kSide * kSide;
+constexpr float kRelFloor = 1e-3f;
+constexpr int kGeom = 31;  // P3 N3 Ng3 T4 uv2 dPdx3 dPdy3 duvdx2 duvdy2 dNdx3 dNdy3
+
+struct Fixture {
+    std::string dir;
+    std::shared_ptr<TextureStore> store;
+    TextureHandle tex;
+    unsigned glTex = 0;
+};
+
+Fixture& fixture() {
+    static Fixture f;
+    static bool init = false;
+    if (init) return f;
+    init = true;
+    f.dir = (std::filesystem::temp_directory_path() / "specula-parity-tex").string();
+    std::filesystem::create_directories(f.dir);
+    // 16x12 RGBA float image with smooth + sharp content.
+    const int w = 16, h = 12;
+    std::vector<float> px(w * h * 4);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            float* p = &px[(y * w + x) * 4];
+            p[0] = float(x) / (w - 1);
+            p[1] = float(y) / (h - 1);
+            p[2] = ((x + y) % 3) * 0.4f;
+            p[3] = 0.25f + 0.5f * ((x * 7 + y * 3) % 5) / 4.f;
+        }
+    std::string file = f.dir + "/grid.exr";
+    auto out = OIIO::ImageOutput::create(file);
+    OIIO::ImageSpec spec(w, h, 4, OIIO::TypeDesc::FLOAT);
+    out->open(file, spec);
+    out->write_image(OIIO::TypeDesc::FLOAT, px.data());
+    out->close();
+    f.store = std::make_shared<TextureStore>(ColorConfig::load("builtin"));
+    f.tex = f.store->load(file, "raw");
+    return f;
+}
+
+// GL texture with the TextureStore's pixels: rows flipped to bottom-up, expanded to RGBA, MIP-mapped.
+unsigned uploadStoreTexture() {
+    Fixture& f = fixture();
+    if (f.glTex) return f.glTex;
+    int w = f.store->width(f.tex), h = f.store->height(f.tex), c = f.store->channels(f.tex);
+    const auto& src = f.store->pixels(f.tex);
+    std::vector<float> rgba(size_t(w) * h * 4);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+            for (int k = 0; k < 4; ++k) {
+                const float* p = &src[(size_t(h - 1 - y) * w + x) * c];
+                rgba[(size_t(y) * w + x) * 4 + k] = k < c ? p[k] : (k == 3 ? 1.f : p[c - 1]);
+            }
+    glGenTextures(1, &f.glTex);
+    glBindTexture(GL_TEXTURE_2D, f.glTex);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, w, h, 0, GL_RGBA, GL_FLOAT, rgba.data());
+    glGenerateMipmap(GL_TEXTURE_2D);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_REPEAT);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_REPEAT);
+    return f.glTex;
+}
+
+Vec3 randUnit(std::mt19937& rng) {
+    std::normal_distribution<float> n(0.f, 1.f);
+    Vec3 v;
+    do v = Vec3(n(rng), n(rng), n(rng));
+    while (glm::dot(v, v) < 1e-4f);
+    return glm::normalize(v);
+}
+
+// Sampling range of an input for the parity grid (documented in docs/nodes.md).
+void parityRange(const NodeSpec& s, const PortSpec& p, float& lo, float& hi) {
+    lo = std::isfinite(p.minValue) ? p.minValue : -2.f;
+    hi = std::isfinite(p.maxValue) ? p.maxValue : 2.f;
+    if (s.id == "bsdf.ggx" && p.name == "roughness") lo = 0.1f;  // α ≥ 0.01: below, D's float conditioning dominates
+    if (s.id == "texture.image" && (p.name == "duvdx" || p.name == "duvdy")) lo = hi = 0.f;  // bilinear (see docs)
+}
+
+struct Layout {
+    std::vector<int> inOffset;  // per input port, -1 if not in the data
+    int floats = 0;
+    int outFloats = 0;
+};
+
+Layout layoutFor(const NodeSpec& s) {
+    Layout L;
+    L.floats = kGeom + 6;
+    for (auto& p : s.inputs) {
+        int w = p.type == TypeDesc::Closure ? 3 : p.type == TypeDesc::String ? (p.enumValues.empty() ? 0 : 1) : typeWidth(p.type);
+        L.inOffset.push_back(w ? L.floats : -1);
+        L.floats += w;
+    }
+    for (auto& o : s.outputs) L.outFloats += o.type == TypeDesc::Closure ? 6 : typeWidth(o.type);
+    return L;
+}
+
+std::string parityShader(const NodeSpec& s, const Layout& L) {
+    std::string src = "#version 450\n" + codegen::glslPrelude() + *s.glslSource() + "\n";
+    bool closures = false;
+    for (auto& p : s.inputs) closures |= p.type == TypeDesc::Closure;
+    const NodeSpec* diffuse = NodeRegistry::instance().find("bsdf.diffuse");
+    if (closures && s.glslFile != diffuse->glslFile) src += *diffuse->glslSource() + "\n";
+    src += R"(layout(binding = 0) uniform sampler2D spc_data;
+layout(binding = 1) uniform sampler2D spc_test_tex;
+layout(location = 0) out vec4 spc_out;
+float spc_in(int i) { return texelFetch(spc_data, ivec2(i >> 2, int(gl_FragCoord.y)), 0)[i & 3]; }
+vec2 spc_in2(int i) { return vec2(spc_in(i), spc_in(i + 1)); }
+vec3 spc_in3(int i) { return vec3(spc_in(i), spc_in(i + 1), spc_in(i + 2)); }
+void main() {
+    SpeculaShadingInputs s;
+    s.position = spc_in3(0); s.normal = spc_in3(3); s.geometric_normal = spc_in3(6);
+    s.tangent = vec4(spc_in3(9), spc_in(12)); s.uv = spc_in2(13);
+    s.dPdx = spc_in3(15); s.dPdy = spc_in3(18); s.duvdx = spc_in2(21); s.duvdy = spc_in2(23);
+    s.dNdx = spc_in3(25); s.dNdy = spc_in3(28);
+    vec3 wo = spc_in3(31), wi = spc_in3(34);
+)";
+    auto expr = [&](int k) -> std::string {
+        const PortSpec& p = s.inputs[k];
+        std::string off = std::to_string(L.inOffset[k]);
+        if (p.type == TypeDesc::Closure) return "spc_cin" + std::to_string(k);
+        if (p.type == TypeDesc::String) return "int(spc_in(" + off + "))";
+        switch (typeWidth(p.type)) {
+            case 1: return "spc_in(" + off + ")";
+            case 2: return "spc_in2(" + off + ")";
+            default: return "spc_in3(" + off + ")";
+        }
+    };
+    for (size_t k = 0; k < s.inputs.size(); ++k)
+        if (s.inputs[k].type == TypeDesc::Closure)
+            src += "    SpeculaClosure spc_cin" + std::to_string(k) + ";\n    spc_bsdf_diffuse(wo, wi, spc_in3(" +
+                   std::to_string(L.inOffset[k]) + "), s.normal, s.tangent.xyz, spc_cin" + std::to_string(k) + ");\n";
+    std::vector<std::string> outs;
+    for (size_t k = 0; k < s.outputs.size(); ++k) {
+        outs.push_back("o" + std::to_string(k));
+        src += std::string("    ") + glslTypeName(s.outputs[k].type) + " " + outs.back() + ";\n";
+    }
+    src += "    " + glsltest::nodeCall(s, expr, outs) + ";\n";
+    src += "    float r[" + std::to_string(L.outFloats + 4) + "];\n";
+    int m = 0;
+    for (size_t k = 0; k < s.outputs.size(); ++k) {
+        const std::string& o = outs[k];
+        auto put = [&](const std::string& e) { src += "    r[" + std::to_string(m++) + "] = " + e + ";\n"; };
+        if (s.outputs[k].type == TypeDesc::Closure) {
+            for (const char* c : {".f.x", ".f.y", ".f.z", ".emission.x", ".emission.y", ".emission.z"}) put(o + c);
+        } else if (typeWidth(s.outputs[k].type) == 1) {
+            put(o);
+        } else {
+            for (int c = 0; c < typeWidth(s.outputs[k].type); ++c) put(o + "[" + std::to_string(c) + "]");
+        }
+    }
+    for (int pad = 0; pad < 4; ++pad) src += "    r[" + std::to_string(m + pad) + "] = 0.0;\n";
+    src += "    int c = int(gl_FragCoord.x) * 4;\n    spc_out = vec4(r[c], r[c + 1], r[c + 2], r[c + 3]);\n}\n";
+    return src;
+}
+
+struct ParityResult {
+    float maxErr = 0.f;
+    int worstSample = -1, worstFloat = -1;
+    float worstCpu = 0.f, worstGpu = 0.f;
+};
+
+ParityResult runParity(const NodeSpec& s, std::string* failure) {
+    ParityResult res;
+    Layout L = layoutFor(s);
+    std::mt19937 rng(1234u + uint32_t(std::hash<std::string>()(s.id) & 0xffff));
+    std::uniform_real_distribution<float> u01(0.f, 1.f);
+    std::vector<std::vector<float>> data(kSamples, std::vector<float>(L.floats, 0.f));
+    int nrm = s.inputIndex("normal");
+    for (int j = 0; j < kSamples; ++j) {
+        float* d = data[j].data();
+        auto put3 = [&](int o, Vec3 v) { d[o] = v.x, d[o + 1] = v.y, d[o + 2] = v.z; };
+        auto rnd = [&](float lo, float hi) { return lo + (hi - lo) * u01(rng); };
+        for (int k = 0; k < 3; ++k) d[k] = rnd(-2.f, 2.f);
+        Vec3 N = randUnit(rng);
+        put3(3, N);
+        put3(6, glm::normalize(N + 0.2f * randUnit(rng)));
+        put3(9, randUnit(rng));
+        d[12] = u01(rng) < 0.5f ? -1.f : 1.f;
+        d[13] = rnd(0.f, 1.f), d[14] = rnd(0.f, 1.f);
+        for (int k = 15; k < kGeom; ++k) d[k] = rnd(-0.05f, 0.05f);
+        for (size_t k = 0; k < s.inputs.size(); ++k) {
+            const PortSpec& p = s.inputs[k];
+            int o = L.inOffset[k];
+            if (o < 0) continue;
+            if (p.type == TypeDesc::Closure) {
+                for (int c = 0; c < 3; ++c) d[o + c] = rnd(0.f, 1.f);
+            } else if (p.type == TypeDesc::String) {
+                d[o] = (s.id == "texture.image") ? 0.f : float(j % int(p.enumValues.size()));
+            } else if (p.type == TypeDesc::Normal3 || (p.type == TypeDesc::Vector3 && p.binding == GeomBinding::T)) {
+                put3(o, randUnit(rng));
+            } else {
+                float lo, hi;
+                parityRange(s, p, lo, hi);
+                for (int c = 0; c < typeWidth(p.type); ++c) d[o + c] = rnd(lo, hi);
+            }
+        }
+        // Directions: mostly above the BSDF's normal (or the shading normal), some below.
+        Vec3 ref = nrm >= 0 && L.inOffset[nrm] >= 0 ? Vec3(d[L.inOffset[nrm]], d[L.inOffset[nrm] + 1], d[L.inOffset[nrm] + 2]) : N;
+        for (int o : {kGeom, kGeom + 3}) {
+            Vec3 w = randUnit(rng);
+            if (glm::dot(w, ref) < 0.f && u01(rng) < 0.85f) w = -w;
+            put3(o, w);
+        }
+    }
+    // GPU
+    int texW = (L.floats + 3) / 4, outW = (L.outFloats + 3) / 4;
+    std::vector<float> packed(size_t(texW) * 4 * kSamples, 0.f);
+    for (int j = 0; j < kSamples; ++j)
+        for (int i = 0; i < L.floats; ++i) packed[size_t(j) * texW * 4 + i] = data[j][i];
+    std::string log;
+    unsigned prog = glsltest::glProgram(parityShader(s, L), &log);
+    if (!prog) {
+        *failure = "GL compile/link failed: " + log;
+        return res;
+    }
+    unsigned dataTex = glsltest::glDataTexture(texW, kSamples, packed);
+    unsigned imgTex = s.has(kGlslTexture) ? uploadStoreTexture() : 0;
+    std::vector<float> gpu = glsltest::glRun(prog, outW, kSamples, [&] {
+        glActiveTexture(GL_TEXTURE0);
+        glBindTexture(GL_TEXTURE_2D, dataTex);
+        glActiveTexture(GL_TEXTURE1);
+        glBindTexture(GL_TEXTURE_2D, imgTex);
+    });
+    glDeleteTextures(1, &dataTex);
+    glDeleteProgram(prog);
+
+    // CPU
+    GraphLoadContext load{s.has(kGlslTexture) ? fixture().store.get() : nullptr, fixture().dir};
+    ScratchArena arena;
+    for (int j = 0; j < kSamples; ++j) {
+        const float* d = data[j].data();
+        auto v3 = [&](int o) { return Vec3(d[o], d[o + 1], d[o + 2]); };
+        json nodes, inputs = json::object();
+        for (size_t k = 0; k < s.inputs.size(); ++k) {
+            const PortSpec& p = s.inputs[k];
+            int o = L.inOffset[k];
+            if (p.type == TypeDesc::String) {
+                if (o >= 0) inputs[p.name] = p.enumValues[int(d[o])];
+                else if (p.name == "file") inputs[p.name] = "grid.exr";
+                else if (p.name == "colorspace") inputs[p.name] = "raw";
+                continue;
+            }
+            if (p.type == TypeDesc::Closure) {
+                std::string id = "src" + std::to_string(k);
+                nodes[id] = {{"type", "bsdf.diffuse"},
+                             {"inputs", {{"color", {d[o], d[o + 1], d[o + 2]}}, {"normal", {d[3], d[4], d[5]}}, {"tangent", {d[9], d[10], d[11]}}}}};
+                inputs[p.name] = "@" + id + ".bsdf";
+                continue;
+            }
+            json arr = json::array();
+            for (int c = 0; c < typeWidth(p.type); ++c) arr.push_back(d[o + c]);
+            inputs[p.name] = typeWidth(p.type) == 1 ? arr[0] : arr;
+        }
+        nodes["n"] = {{"type", s.id}, {"inputs", inputs}};
+        json m = {{"nodes", nodes}, {"output", "@n." + s.outputs[0].name}};
+        GraphDesc g = parseGraph(m, "/parity", ParseOptions{false});
+        std::vector<std::pair<int, int>> roots;
+        for (size_t k = 0; k < s.outputs.size(); ++k) roots.push_back({g.findNode("n"), int(k)});
+        Program prog = Program::compile(g, roots, &load);
+        ShadingPoint sp;
+        sp.p = v3(0), sp.n = v3(3), sp.ng = v3(6), sp.tangent = Vec4(v3(9), d[12]);
+        sp.uv = Vec2(d[13], d[14]);
+        sp.dpdx = v3(15), sp.dpdy = v3(18), sp.duvdx = Vec2(d[21], d[22]), sp.duvdy = Vec2(d[23], d[24]);
+        sp.dndx = v3(25), sp.dndy = v3(28);
+        sp.hasDifferentials = true;
+        sp.frame = Frame::fromNormal(sp.n);
+        Vec3 wo = v3(kGeom), wi = v3(kGeom + 3);
+        sp.wo = wo;
+        Closure cl;
+        Color3 em(0.f);
+        const float* r = prog.run(sp, arena, s.outputs[0].type == TypeDesc::Closure ? &cl : nullptr, &em);
+        std::vector<float> cpu;
+        for (size_t k = 0; k < s.outputs.size(); ++k) {
+            if (s.outputs[k].type == TypeDesc::Closure) {
+                Color3 f = cl.eval(sp.frame.toLocal(wo), sp.frame.toLocal(wi)).total();
+                cpu.insert(cpu.end(), {f.x, f.y, f.z, em.x, em.y, em.z});
+            } else {
+                for (int c = 0; c < typeWidth(s.outputs[k].type); ++c) cpu.push_back(r[prog.rootRegister(k) + c]);
+            }
+        }
+        arena.reset();
+        for (int i = 0; i < L.outFloats; ++i) {
+            float gv = gpu[size_t(j) * outW * 4 + i], cv = cpu[i];
+            float err = std::abs(gv - cv) / std::max(std::abs(cv), kRelFloor);
+            if (!(err <= res.maxErr)) {  // also catches NaN
+                res.maxErr = std::isnan(err) ? 1e30f : err;
+                res.worstSample = j, res.worstFloat = i, res.worstCpu = cv, res.worstGpu = gv;
+            }
+        }
+    }
+    return res;
+}
+
+class GlslParity : public ::testing::TestWithParam<std::string> {
+protected:
+    void SetUp() override {
+        std::string why;
+        // No silent skip: a missing EGL/llvmpipe context is a failure (CI installs Mesa, platform.md §3).
+        ASSERT_TRUE(glsltest::glContext(&why)) << "headless EGL context unavailable: " << why;
+    }
+};
+
+TEST_P(GlslParity, NodeMatchesCpu) {
+    const NodeSpec* s = NodeRegistry::instance().find(GetParam());
+    ASSERT_NE(s, nullptr);
+    std::string failure;
+    ParityResult r = runParity(*s, &failure);
+    ASSERT_TRUE(failure.empty()) << failure;
+    std::printf("PARITY %-28s max_rel_err %.3g  tolerance %.3g\n", s->id.c_str(), r.maxErr, s->parityTolerance);
+    EXPECT_LE(r.maxErr, s->parityTolerance) << "sample " << r.worstSample << " output float " << r.worstFloat << ": cpu "
+                                            << r.worstCpu << " gpu " << r.worstGpu;
+}
+
+std::vector<std::string> allNodeIds() {
+    // Registration happens in static initialisers of the node objects linked into this binary.
+    return NodeRegistry::instance().ids();
+}
+
+INSTANTIATE_TEST_SUITE_P(AllNodes, GlslParity, ::testing::ValuesIn(allNodeIds()), [](const auto& info) {
+    std::string n = info.param;
+    for (char& c : n)
+        if (!std::isalnum((unsigned char)c)) c = '_';
+    return n;
+});
+
+}  // namespace
+
+namespace {
+
+// Emitted modules end to end: uniform block uploaded from GlslModule::uniforms (std140 offsets),
+// geometric bindings, specula_eval/specula_emission vs GraphMaterial::shade + Closure::eval.
+class GlslEmittedParity : public ::testing::TestWithParam<std::string> {
+protected:
+    void SetUp() override {
+        std::string why;
+        ASSERT_TRUE(glsltest::glContext(&why)) << "headless EGL context unavailable: " << why;
+    }
+};
+
+TEST_P(GlslEmittedParity, MaterialMatchesCpu) {
+    json scene;
+    std::ifstream(std::string(SPECULA_SOURCE_DIR) + "/tests/glsl/data/materials.json") >> scene;
+    const json& mj = scene["materials"][GetParam()];
+    GraphDesc g = parseGraph(mj, "/materials/" + GetParam());
+    codegen::GlslModule mod = codegen::emitGlsl(g);
+    auto mat = loadGraphMaterial(mj, "/materials/" + GetParam(), GraphLoadContext{});
+
+    std::mt19937 rng(99);
+    std::uniform_real_distribution<float> u01(0.f, 1.f);
+    const int F = 12;  // P3 N3 T3 uv2 pad | wo3 wi3 (3 texels)
+    std::vector<float> data(size_t(kSamples) * F, 0.f);
+    for (int j = 0; j < kSamples; ++j) {
+        float* d = &data[size_t(j) * F];
+        Vec3 N = randUnit(rng), T = randUnit(rng);
+        Vec3 P(u01(rng), u01(rng), u01(rng));
+        float v[] = {P.x, P.y, P.z, N.x, N.y, N.z, T.x, T.y, T.z, u01(rng), u01(rng), 0.f};
+        std::copy(v, v + 12, d);
+    }
+    std::vector<float> dirs(size_t(kSamples) * 8, 0.f);
+    for (int j = 0; j < kSamples; ++j) {
+        Vec3 N(data[size_t(j) * F + 3], data[size_t(j) * F + 4], data[size_t(j) * F + 5]);
+        Vec3 wo = randUnit(rng), wi = randUnit(rng);
+        if (glm::dot(wo, N) < 0.f) wo = -wo;
+        if (glm::dot(wi, N) < 0.f && u01(rng) < 0.9f) wi = -wi;
+        float v[] = {wo.x, wo.y, wo.z, wi.x, wi.y, wi.z, 0.f, 0.f};
+        std::copy(v, v + 8, &dirs[size_t(j) * 8]);
+    }
+    std::vector<float> packed(size_t(kSamples) * 20, 0.f);
+    for (int j = 0; j < kSamples; ++j) {
+        std::copy(&data[size_t(j) * F], &data[size_t(j) * F] + 12, &packed[size_t(j) * 20]);
+        std::copy(&dirs[size_t(j) * 8], &dirs[size_t(j) * 8] + 8, &packed[size_t(j) * 20 + 12]);
+    }
+    std::string fs = mod.source + R"(
+layout(binding = 0) uniform sampler2D spc_data_;
+layout(location = 0) out vec4 spc_out;
+vec4 spc_px(int i) { return texelFetch(spc_data_, ivec2(i, int(gl_FragCoord.y)), 0); }
+void main() {
+    vec4 a = spc_px(0), b = spc_px(1), c = spc_px(2), d = spc_px(3), e = spc_px(4);
+    SpeculaShadingInputs s;
+    s.position = a.xyz; s.normal = vec3(a.w, b.xy); s.tangent = vec4(b.zw, c.x, 1.0);
+    s.geometric_normal = s.normal; s.uv = c.yz;
+    s.dPdx = vec3(0.0); s.dPdy = vec3(0.0); s.duvdx = vec2(0.0); s.duvdy = vec2(0.0); s.dNdx = vec3(0.0); s.dNdy = vec3(0.0);
+    vec3 wo = d.xyz, wi = vec3(d.w, e.xy);
+    spc_out = int(gl_FragCoord.x) == 0 ? vec4(specula_eval(s, wo, wi), 0.0) : vec4(specula_emission(s, wo), 0.0);
+}
+)";
+    std::string log;
+    unsigned prog = glsltest::glProgram(fs, &log);
+    ASSERT_NE(prog, 0u) << log;
+    unsigned tex = glsltest::glDataTexture(5, kSamples, packed);
+    std::vector<char> ubo(std::max<uint32_t>(mod.uniformBlockSize, 16), 0);
+    for (auto& u : mod.uniforms) std::memcpy(&ubo[u.offset], u.value.data(), 4 * typeWidth(u.type));
+    GLuint buf;
+    glGenBuffers(1, &buf);
+    glBindBuffer(GL_UNIFORM_BUFFER, buf);
+    glBufferData(GL_UNIFORM_BUFFER, GLsizeiptr(ubo.size()), ubo.data(), GL_STATIC_DRAW);
+    std::vector<float> gpu = glsltest::glRun(prog, 2, kSamples, [&] {
+        glBindBufferBase(GL_UNIFORM_BUFFER, 0, buf);
+        glActiveTexture(GL_TEXTURE0);
+        glBindTexture(GL_TEXTURE_2D, tex);
+    });
+    glDeleteBuffers(1, &buf);
+    glDeleteTextures(1, &tex);
+    glDeleteProgram(prog);
+
+    float maxErr = 0.f;
+    ScratchArena arena;
+    for (int j = 0; j < kSamples; ++j) {
+        const float* d = &packed[size_t(j) * 20];
+        ShadingPoint sp;
+        sp.p = Vec3(d[0], d[1], d[2]);
+        sp.n = sp.ng = Vec3(d[3], d[4], d[5]);
+        sp.tangent = Vec4(d[6], d[7], d[8], 1.f);
+        sp.uv = Vec2(d[9], d[10]);
+        Vec3 wo(d[12], d[13], d[14]), wi(d[15], d[16], d[17]);
+        sp.wo = wo;
+        Closure cl;
+        mat->shade(sp, arena, cl);
+        Color3 f = cl.eval(sp.frame.toLocal(wo), sp.frame.toLocal(wi)).total();
+        Color3 em = mat->emission(sp);
+        arena.reset();
+        for (int c = 0; c < 3; ++c) {
+            float e1 = std::abs(gpu[size_t(j) * 8 + c] - f[c]) / std::max(std::abs(f[c]), kRelFloor);
+            float e2 = std::abs(gpu[size_t(j) * 8 + 4 + c] - em[c]) / std::max(std::abs(em[c]), kRelFloor);
+            maxErr = std::max({maxErr, e1, e2});
+            if (!(e1 <= 2e-4f)) ADD_FAILURE() << "sample " << j << " ch " << c << " cpu " << f[c] << " gpu " << gpu[size_t(j) * 8 + c];
+            if (j > 8 && HasFailure()) return;
+        }
+    }
+    std::printf("PARITY material %-20s max_rel_err %.3g  tolerance 2e-4\n", GetParam().c_str(), maxErr);
+    EXPECT_LE(maxErr, 2e-4f);
+}
+
+INSTANTIATE_TEST_SUITE_P(TestMaterials, GlslEmittedParity,
+                         ::testing::Values("gold_mirror", "brushed_steel", "plastic", "bumpy_copper"));
+
+// specula_shading_inputs() derives the screen-space derivatives with dFdx/dFdy: for attributes
+// linear in the pixel position they equal the per-pixel step exactly.
+TEST(GlslDerivatives, ShadingInputsFromFragmentUseScreenDerivatives) {
+    std::string why;
+    ASSERT_TRUE(glsltest::glContext(&why)) << why;
+    const NodeSpec* uv = NodeRegistry::instance().find("geometry.uv");
+    const NodeSpec* pos = NodeRegistry::instance().find("geometry.position");
+    std::string fs = "#version 450\n" + codegen::glslPrelude() + *uv->glslSource() + *pos->glslSource() + R"(
+layout(location = 0) out vec4 spc_out;
+void main() {
+    vec2 uv0 = gl_FragCoord.xy * vec2(0.125, 0.0625);
+    vec3 P = vec3(gl_FragCoord.x * 0.5, gl_FragCoord.y * 0.25, 1.0);
+    SpeculaShadingInputs s = specula_shading_inputs(P, vec3(0, 0, 1), vec3(0, 0, 1), vec4(1, 0, 0, 1), uv0);
+    vec2 uv, dx, dy; vec3 p, dpx, dpy;
+    spc_geometry_uv(s, uv, dx, dy);
+    spc_geometry_position(s, p, dpx, dpy);
+    spc_out = vec4(dx.x, dy.y, dpx.x, dpy.y);
+}
+)";
+    std::string log;
+    unsigned prog = glsltest::glProgram(fs, &log);
+    ASSERT_NE(prog, 0u) << log;
+    std::vector<float> px = glsltest::glRun(prog, 8, 8);
+    for (int i = 0; i < 64; ++i) {
+        EXPECT_FLOAT_EQ(px[i * 4 + 0], 0.125f);
+        EXPECT_FLOAT_EQ(px[i * 4 + 1], 0.0625f);
+        EXPECT_FLOAT_EQ(px[i * 4 + 2], 0.5f);
+        EXPECT_FLOAT_EQ(px[i * 4 + 3], 0.25f);
+    }
+    glDeleteProgram(prog);
+}
+
+}  // namespace

@@ -1,0 +1,118 @@
+// Graph input errors: each kind names the JSON pointer of the offending value and a suggestion.
+#include "core/graph/graph_material.h"
+#include "core/util/error.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+using namespace specula;
+using nlohmann::json;
+
+namespace {
+
+// Loads 'm' as /materials/steel and returns the InputError (fails the test if none is thrown).
+InputError loadError(const json& m) {
+    try {
+        loadGraphMaterial(m, "/materials/steel", GraphLoadContext{});
+    } catch (const InputError& e) {
+        return e;
+    }
+    ADD_FAILURE() << "no InputError for " << m.dump();
+    return InputError("", "");
+}
+
+json ggx(json inputs) { return {{"type", "bsdf.ggx"}, {"inputs", inputs}}; }
+
+}  // namespace
+
+TEST(GraphErrors, UnknownNodeType) {
+    InputError e = loadError({{"nodes", {{"spec", {{"type", "bsdf.gxx"}}}}}, {"output", "@spec.bsdf"}});
+    EXPECT_EQ(e.pointer(), "/materials/steel/nodes/spec/type");
+    EXPECT_EQ(e.suggestion(), "bsdf.ggx");
+    EXPECT_NE(std::string(e.what()).find("/materials/steel/nodes/spec/type"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("did you mean 'bsdf.ggx'"), std::string::npos);
+    // family name without the type suffix suggests a typed variant
+    InputError e2 = loadError({{"nodes", {{"a", {{"type", "math.add"}}}, {"g", ggx(json::object())}}}, {"output", "@g.bsdf"}});
+    EXPECT_EQ(e2.suggestion().rfind("math.add.", 0), 0u);
+}
+
+TEST(GraphErrors, UnknownPort) {
+    InputError e = loadError({{"nodes", {{"spec", ggx({{"roughnes", 0.2}})}}}, {"output", "@spec.bsdf"}});
+    EXPECT_EQ(e.pointer(), "/materials/steel/nodes/spec/inputs/roughnes");
+    EXPECT_EQ(e.suggestion(), "roughness");
+    EXPECT_NE(std::string(e.what()).find("did you mean 'roughness'"), std::string::npos);
+    // unknown output port in a reference
+    InputError e2 = loadError({{"nodes", {{"nm", {{"type", "texture.normal_map"}}}, {"spec", ggx({{"normal", "@nm.normals"}})}}},
+                               {"output", "@spec.bsdf"}});
+    EXPECT_EQ(e2.pointer(), "/materials/steel/nodes/spec/inputs/normal");
+    EXPECT_EQ(e2.suggestion(), "normal");
+}
+
+TEST(GraphErrors, WrongType) {
+    // connection type mismatch: colour into a float port, the suggestion is the explicit converter
+    json nodes = {{"c", {{"type", "constant.color3"}, {"inputs", {{"value", {0.1, 0.2, 0.3}}}}}},
+                  {"spec", ggx({{"roughness", "@c.out"}})}};
+    InputError e = loadError({{"nodes", nodes}, {"output", "@spec.bsdf"}});
+    EXPECT_EQ(e.pointer(), "/materials/steel/nodes/spec/inputs/roughness");
+    EXPECT_EQ(e.suggestion(), "convert.color3_to_float");
+    EXPECT_NE(std::string(e.what()).find("wrong type"), std::string::npos);
+    // literal of the wrong shape
+    InputError e2 = loadError({{"nodes", {{"spec", ggx({{"f0", {0.1, 0.2}}})}}}, {"output", "@spec.bsdf"}});
+    EXPECT_EQ(e2.pointer(), "/materials/steel/nodes/spec/inputs/f0");
+    // bad enum value gets the nearest choice
+    InputError e3 = loadError({{"nodes", {{"spec", ggx({{"fresnel", "conductr"}})}}}, {"output", "@spec.bsdf"}});
+    EXPECT_EQ(e3.pointer(), "/materials/steel/nodes/spec/inputs/fresnel");
+    EXPECT_EQ(e3.suggestion(), "conductor");
+}
+
+TEST(GraphErrors, Cycle) {
+    json nodes = {{"a", {{"type", "math.add.float"}, {"inputs", {{"a", "@b.out"}}}}},
+                  {"b", {{"type", "math.mul.float"}, {"inputs", {{"a", "@a.out"}}}}},
+                  {"spec", ggx({{"roughness", "@b.out"}})}};
+    InputError e = loadError({{"nodes", nodes}, {"output", "@spec.bsdf"}});
+    EXPECT_EQ(e.pointer(), "/materials/steel/nodes/b/inputs/a");
+    EXPECT_NE(std::string(e.what()).find("cycle"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("a -> b -> a"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("remove this connection"), std::string::npos);
+}
+
+TEST(GraphErrors, UnconnectedRequiredInput) {
+    json nodes = {{"d", {{"type", "bsdf.diffuse"}}}, {"spec", ggx(json::object())},
+                  {"sum", {{"type", "closure.add"}, {"inputs", {{"a", "@spec.bsdf"}}}}}};
+    InputError e = loadError({{"nodes", nodes}, {"output", "@sum.bsdf"}});
+    EXPECT_EQ(e.pointer(), "/materials/steel/nodes/sum/inputs/b");
+    EXPECT_EQ(e.suggestion(), "@d.bsdf");
+    EXPECT_NE(std::string(e.what()).find("not connected"), std::string::npos);
+    // a string input without default (texture colorspace must be explicit)
+    InputError e2 = loadError({{"nodes", {{"t", {{"type", "texture.image"}, {"inputs", {{"file", "a.png"}}}}}, {"spec", ggx(json::object())}}},
+                               {"output", "@spec.bsdf"}});
+    EXPECT_EQ(e2.pointer(), "/materials/steel/nodes/t/inputs/colorspace");
+}
+
+TEST(GraphErrors, OutputIsNotAClosure) {
+    json nodes = {{"nm", {{"type", "texture.normal_map"}}}, {"spec", ggx({{"normal", "@nm.normal"}})}};
+    InputError e = loadError({{"nodes", nodes}, {"output", "@nm.normal"}});
+    EXPECT_EQ(e.pointer(), "/materials/steel/output");
+    EXPECT_EQ(e.suggestion(), "@spec.bsdf");
+    EXPECT_NE(std::string(e.what()).find("must be a closure"), std::string::npos);
+}
+
+TEST(GraphErrors, MalformedAndUnknownReferences) {
+    InputError e = loadError({{"nodes", {{"nm", {{"type", "texture.normal_map"}}}, {"spec", ggx({{"normal", "@nm"}})}}}, {"output", "@spec.bsdf"}});
+    EXPECT_EQ(e.pointer(), "/materials/steel/nodes/spec/inputs/normal");
+    EXPECT_EQ(e.suggestion(), "@nm.normal");
+    InputError e2 = loadError({{"nodes", {{"nmap", {{"type", "texture.normal_map"}}}, {"spec", ggx({{"normal", "@nmp.normal"}})}}},
+                               {"output", "@spec.bsdf"}});
+    EXPECT_EQ(e2.pointer(), "/materials/steel/nodes/spec/inputs/normal");
+    EXPECT_EQ(e2.suggestion(), "nmap");
+    InputError e3 = loadError({{"nodes", {{"spec", ggx(json::object())}}}, {"output", "@spek.bsdf"}});
+    EXPECT_EQ(e3.pointer(), "/materials/steel/output");
+    EXPECT_EQ(e3.suggestion(), "spec");
+    InputError e4 = loadError({{"nodes", {{"spec", ggx(json::object())}}}, {"outptu", "@spec.bsdf"}});
+    EXPECT_EQ(e4.pointer(), "/materials/steel/outptu");
+    EXPECT_EQ(e4.suggestion(), "output");
+    // closure literal
+    InputError e5 = loadError({{"nodes", {{"spec", ggx(json::object())}, {"m", {{"type", "closure.mix"}, {"inputs", {{"a", 1.0}, {"b", "@spec.bsdf"}}}}}}},
+                               {"output", "@m.bsdf"}});
+    EXPECT_EQ(e5.pointer(), "/materials/steel/nodes/m/inputs/a");
+}
