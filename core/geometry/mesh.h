@@ -37,6 +37,12 @@ public:
     virtual ~AnalyticSurface() = default;
     // pObject: a point on (or very near) the tessellation, in object space.
     virtual SurfaceGeometry at(const Vec3& pObject) const = 0;
+    // Closest point and unit normal only (no parameters or derivatives): what hit refinement needs.
+    virtual void closest(const Vec3& pObject, Vec3& p, Vec3& n) const {
+        SurfaceGeometry g = at(pObject);
+        p = g.p;
+        n = g.n;
+    }
     // Planar surfaces coincide with their tessellation, so hits need no refinement onto the surface.
     virtual bool isPlanar() const { return false; }
 };

@@ -70,6 +70,11 @@ public:
         g.dndv = g.dpdv / float(r_);
         return g;
     }
+    void closest(const Vec3& pObject, Vec3& p, Vec3& n) const override {
+        float len = glm::length(pObject);
+        n = len > 0.f ? pObject / len : Vec3(0, 0, 1);
+        p = n * float(r_);
+    }
     // Direct evaluation without trigonometric round trips (the hot path of every sphere hit):
     // n = p/|p|, dp/du = 2π (-y, x, 0), dp/dv = π r (cosθ cosφ, cosθ sinφ, -sinθ).
     SurfaceGeometry at(const Vec3& pObject) const override {

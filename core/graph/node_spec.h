@@ -144,7 +144,7 @@ struct NodeSpec {
 };
 
 // ---- flat instruction list ---------------------------------------------------------------------
-constexpr int kMaxInputs = 12;
+constexpr int kMaxInputs = 24;  // bsdf.glint has 20 inputs
 constexpr int kMaxOutputs = 4;
 constexpr uint16_t kNoRegister = 0xFFFF;
 

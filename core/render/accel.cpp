@@ -186,17 +186,18 @@ ShadingPoint Accel::shadingPoint(const RayDifferential& ray, const Hit& hit) con
         const Vec3 oObj = Vec3(sh.worldToObject * Vec4(ray.o, 1.f));
         const Vec3 dObj = Mat3(sh.worldToObject) * ray.d;
         float t = hit.t;
-        SurfaceGeometry g = sh.surface->at(oObj + t * dObj);
         // Only rays with differentials need positions continuous across facets; planar shapes are exact.
         const int iterations = (ray.hasDifferentials && !sh.surface->isPlanar()) ? 2 : 0;
         for (int it = 0; it < iterations; ++it) {
-            float denom = glm::dot(g.n, dObj);
+            Vec3 q, qn;
+            sh.surface->closest(oObj + t * dObj, q, qn);
+            float denom = glm::dot(qn, dObj);
             if (std::abs(denom) < 1e-6f) break;
-            float dt = glm::dot(g.n, g.p - (oObj + t * dObj)) / denom;
+            float dt = glm::dot(qn, q - (oObj + t * dObj)) / denom;
             if (!std::isfinite(dt) || std::abs(dt) > 0.05f * hit.t) break;  // stay near the facet hit
             t += dt;
-            g = sh.surface->at(oObj + t * dObj);
         }
+        SurfaceGeometry g = sh.surface->at(oObj + t * dObj);
         Mat3 lin(sh.objectToWorld);
         sp.p = Vec3(sh.objectToWorld * Vec4(g.p, 1.f));
         sp.uv = g.uv;

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <memory>
 #include <new>
+#include <type_traits>
 #include <vector>
 
 namespace specula {
@@ -67,7 +68,10 @@ public:
     T* make(Args&&... args) {
         void* mem = allocate(sizeof(T), alignof(T));
         T* obj = new (mem) T(std::forward<Args>(args)...);
-        if constexpr (!std::is_trivially_destructible_v<T>) dtors_.push_back({[](void* p) { static_cast<T*>(p)->~T(); }, obj});
+        // Lobes are plain parameter records (they must not own resources), so they are discarded in
+        // bulk without destructor calls; anything else gets its destructor run at reset().
+        if constexpr (!std::is_trivially_destructible_v<T> && !std::is_base_of_v<BsdfLobe, T>)
+            dtors_.push_back({[](void* p) { static_cast<T*>(p)->~T(); }, obj});
         return obj;
     }
     void* allocate(size_t size, size_t align);

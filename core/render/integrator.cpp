@@ -48,7 +48,8 @@ void addIndirect(SampleValue& out, const Throughput& beta, const Color3& L, floa
 }
 }  // namespace
 
-SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampler, ScratchArena& arena) const {
+SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampler, ScratchArena& arena,
+                           const QuadRays* quad) const {
     SampleValue out;
     Hit hit;
     if (!accel_.intersect(cameraRay, hit)) {
@@ -79,6 +80,32 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
         sampler.setDimension(firstBounceDim + uint32_t(depth) * dimsPerBounce_);
         arena.reset();
         sp.depth = depth;
+        if (depth == 0 && quad) {
+            // GPU 2×2-quad emulation (filtered-ggx.md §5.2): shade the partners' pixel-centre hits (their lobes are
+            // dropped with this vertex's arena) and replace the ray differentials by fine one-sided differences.
+            for (int k = 0; k < 2; ++k) {
+                ShadingPoint::QuadNeighbour& nb = sp.quad[k];
+                Hit hn;
+                if (!accel_.intersect(quad->ray[k], hn) || scene_.shapes[hn.shape].areaLight >= 0) continue;
+                ShadingPoint spn = accel_.shadingPoint(quad->ray[k], hn);
+                Closure ignored;
+                scene_.materials[scene_.shapes[spn.shapeId].material]->shade(spn, arena, ignored);
+                nb.valid = true;
+                nb.sign = quad->sign[k];
+                nb.p = spn.p;
+                nb.wo = spn.wo;
+                nb.frame = spn.frame;
+                Vec3& dp = k == 0 ? sp.dpdx : sp.dpdy;
+                Vec3& dn = k == 0 ? sp.dndx : sp.dndy;
+                Vec3& dwo = k == 0 ? sp.dwodx : sp.dwody;
+                Vec2& duv = k == 0 ? sp.duvdx : sp.duvdy;
+                dp = nb.sign * (spn.p - sp.p);
+                dn = nb.sign * (spn.n - sp.n);
+                dwo = nb.sign * (spn.wo - sp.wo);
+                duv = nb.sign * (spn.uv - sp.uv);
+            }
+            sp.hasDifferentials = sp.quad[0].valid && sp.quad[1].valid;
+        }
         const Material& material = *scene_.materials[scene_.shapes[sp.shapeId].material];
         Closure closure;
         material.shade(sp, arena, closure);
@@ -105,6 +132,9 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
             Vec3 wiL = sp.frame.toLocal(ls.wi);
             // Reject directions on the wrong side of the geometric surface (light leaks through normals).
             if (glm::dot(ls.wi, sp.ng) <= 0.f) continue;
+            // Delta lights only: area/environment lights are also reached by BSDF sampling (where dwi = 0), and MIS
+            // needs one f for both strategies (filtered-ggx.md §5.1).
+            sp.lightDistance = ls.delta ? ls.distance : std::numeric_limits<float>::infinity();
             BsdfEval f = closure.eval(wo, wiL);
             if (maxComponent(f.total()) <= 0.f) continue;
             Ray shadow;
@@ -123,6 +153,7 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
         }
 
         // BSDF sampling: hits emitters (MIS) and continues the path.
+        sp.lightDistance = std::numeric_limits<float>::infinity();
         BsdfSample bs;
         float uLobe = sampler.get1D();
         Vec2 uDir = sampler.get2D();

@@ -19,11 +19,20 @@ struct SampleValue {
     float depth = 1e10f;  // camera-space depth along the view axis; 1e10 where the ray escapes (as Cycles)
 };
 
+// Render setting "derivatives": "quad": the camera rays of a pixel's 2×2-quad partners along x ([0]) and y ([1])
+// and the sign of the fine difference (+1 if the pixel is the quad's x0 / y0), filtered-ggx.md §5.2.
+struct QuadRays {
+    RayDifferential ray[2];
+    float sign[2] = {1.f, 1.f};
+};
+
 class Integrator {
 public:
     Integrator(const Scene& scene, const Accel& accel);
-    // Radiance along a camera ray. 'arena' is reset at every path vertex.
-    SampleValue li(const RayDifferential& cameraRay, PixelSampler& sampler, ScratchArena& arena) const;
+    // Radiance along a camera ray. 'arena' is reset at every path vertex. With 'quad', the camera hit's differentials
+    // are the fine finite differences to the quad partners' hits and sp.quad holds their shaded frames.
+    SampleValue li(const RayDifferential& cameraRay, PixelSampler& sampler, ScratchArena& arena,
+                   const QuadRays* quad = nullptr) const;
 
 private:
     // Radiance arriving from escaped rays (sum over environment lights).

@@ -109,7 +109,17 @@ RenderOutput renderScene(const Scene& scene, const RenderOptions& options) {
                     Vec2 uLens = sampler.get2D();
                     RayDifferential ray = camera.generateRay(x + 0.5f + off.x, y + 0.5f + off.y, uLens);
                     ray.scaleDifferentials(diffScale);
-                    SampleValue v = integrator.li(ray, sampler, arena);
+                    QuadRays quad;
+                    if (rs.derivatives == DerivativeMode::Quad) {
+                        // Partners in the aligned 2×2 quad (absolute pixel coordinates), same sub-pixel offset and lens
+                        // sample: Δ = q(x0 + 1) − q(x0) as dFdxFine (filtered-ggx.md §5.2).
+                        const int xn = x ^ 1, yn = y ^ 1;
+                        quad.ray[0] = camera.generateRay(xn + 0.5f + off.x, y + 0.5f + off.y, uLens);
+                        quad.ray[1] = camera.generateRay(x + 0.5f + off.x, yn + 0.5f + off.y, uLens);
+                        quad.sign[0] = (x & 1) ? -1.f : 1.f;
+                        quad.sign[1] = (y & 1) ? -1.f : 1.f;
+                    }
+                    SampleValue v = integrator.li(ray, sampler, arena, rs.derivatives == DerivativeMode::Quad ? &quad : nullptr);
                     ++tileSamples;
                     if (!finiteSample(v)) {
                         ++tileInvalid;

@@ -5,6 +5,7 @@
 #include "core/math/math.h"
 
 #include <cstdint>
+#include <limits>
 
 namespace specula {
 
@@ -28,6 +29,21 @@ struct ShadingPoint {
     Vec2 duvdx{0.f}, duvdy{0.f};
     Vec3 dndx{0.f}, dndy{0.f};
     Vec3 dwodx{0.f}, dwody{0.f};  // derivative of wo (world)
+
+    // Distance to the light sample being evaluated: set by the integrator's next-event estimation for delta (point,
+    // spot) lights before Closure::eval, +inf otherwise (directional, environment, area lights, BSDF-sampled
+    // directions), so lobes filtered by half-vector derivatives can differentiate wi (filtered-ggx.md §5.1).
+    float lightDistance = std::numeric_limits<float>::infinity();
+    // Render setting "derivatives": "quad" (filtered-ggx.md §5.2): this pixel's partners in its aligned 2×2 quad along
+    // screen x ([0]) and y ([1]), shaded at their own pixel centres; the differentials above then hold the fine
+    // one-sided differences sign·(neighbour − this).
+    struct QuadNeighbour {
+        bool valid = false;
+        float sign = 1.f;  // +1 if this pixel is the quad's x0 (y0): Δ = q(neighbour) − q(this); −1 otherwise
+        Vec3 p{0.f}, wo{0.f};
+        Frame frame;       // its shading frame after its material ran (normal maps included)
+    };
+    QuadNeighbour quad[2];
 
     int depth = 0;          // 0 at the camera hit
     uint32_t shapeId = 0;   // index of the shape in the scene

@@ -19,6 +19,10 @@ class TextureStore;
 
 enum class IntegratorKind { Direct, Path };
 enum class PixelFilterKind { Box, Gaussian };
+// Screen-space derivatives of camera hits: "ray" = ray differentials (pbrt-v4); "quad" = emulated GPU 2×2-quad fine
+// finite differences (dFdxFine/dFdyFine) between pixel-centre hits, for like-for-like CPU/GLSL comparisons
+// (filtered-ggx.md §5.2).
+enum class DerivativeMode { Ray, Quad };
 
 struct CropWindow {
     int x0 = 0, y0 = 0, x1 = 0, y1 = 0;  // pixel bounds, [x0,x1) x [y0,y1)
@@ -34,6 +38,7 @@ struct RenderSettings {
     PixelFilterKind filter = PixelFilterKind::Box;
     float gaussianSigma2 = 1.f / (2.f * kPi);  // σ² of the Gaussian filter in pixel² (T&K 2021 reference)
     bool pixelCenter = false;  // spp = 1 samples the pixel centre (validation.md §1)
+    DerivativeMode derivatives = DerivativeMode::Ray;  // "derivatives": "ray" | "quad"
     float clampIndirect = 0.f; // max component of one indirect contribution (Cycles' clamp_indirect); 0 = off
     std::optional<CropWindow> crop;
 };

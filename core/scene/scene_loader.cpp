@@ -53,7 +53,7 @@ std::string fileMustExist(const Context& ctx, const JsonReader& r, const std::st
 void readRender(const Json& j, Scene& s) {
     JsonReader r(j, "/render",
                  {"width", "height", "spp", "seed", "tile", "integrator", "max_depth", "filter", "gaussian_sigma2",
-                  "pixel_center", "clamp_indirect"});
+                  "pixel_center", "clamp_indirect", "derivatives"});
     RenderSettings& rs = s.render;
     rs.width = r.integer("width", rs.width, 1, kMaxDimension);
     rs.height = r.integer("height", rs.height, 1, kMaxDimension);
@@ -67,6 +67,8 @@ void readRender(const Json& j, Scene& s) {
                                                                            : PixelFilterKind::Gaussian;
     rs.gaussianSigma2 = r.number("gaussian_sigma2", rs.gaussianSigma2, 1e-4f, 16.f);
     rs.pixelCenter = r.boolean("pixel_center", false);
+    // "derivatives": "ray" (ray differentials, default) | "quad" (GPU 2×2-quad finite differences, filtered-ggx.md §5.2)
+    rs.derivatives = r.enumeration("derivatives", "ray", {"ray", "quad"}) == "quad" ? DerivativeMode::Quad : DerivativeMode::Ray;
     rs.clampIndirect = r.number("clamp_indirect", 0.f, 0.f, 1e9f);
     if (int64_t(rs.width) * rs.height > kMaxPixels)
         r.fail("width", "image of " + std::to_string(rs.width) + "x" + std::to_string(rs.height) +

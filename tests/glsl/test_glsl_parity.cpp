@@ -8,8 +8,10 @@
 #include "core/codegen/glsl_sources.h"
 #include "core/color/color_config.h"
 #include "core/graph/graph_material.h"
+#include "core/texture/lean_moments.h"
 #include "core/texture/texture_store.h"
 #include "glsl_harness.h"
+#include "nodes/bsdf/glint/glint_dictionary.h"
 
 #include <GL/gl.h>
 #include <GL/glext.h>
@@ -91,6 +93,47 @@ unsigned uploadStoreTexture() {
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_REPEAT);
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_REPEAT);
     return f.glTex;
+}
+
+// The glint dictionary as bsdf.glint's GLSL expects it (nodes/bsdf/glint/glint.glsl header): unit 15,
+// GL_TEXTURE_1D_ARRAY RGBA32F with our box MIP chain, mirrored repeat on s, trilinear.
+unsigned uploadGlintDictionary() {
+    static unsigned tex = 0;
+    if (tex) return tex;
+    const glint::Dictionary& d = glint::Dictionary::instance();
+    glGenTextures(1, &tex);
+    glBindTexture(GL_TEXTURE_1D_ARRAY, tex);
+    for (int m = 0; m < glint::kMips; ++m)
+        glTexImage2D(GL_TEXTURE_1D_ARRAY, m, GL_RGBA32F, glint::mipRes(m), glint::Dictionary::kGpuLayers, 0, GL_RGBA, GL_FLOAT,
+                     d.gpuMipRgba(m).data());
+    glTexParameteri(GL_TEXTURE_1D_ARRAY, GL_TEXTURE_BASE_LEVEL, 0);
+    glTexParameteri(GL_TEXTURE_1D_ARRAY, GL_TEXTURE_MAX_LEVEL, glint::kMips - 1);
+    glTexParameteri(GL_TEXTURE_1D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
+    glTexParameteri(GL_TEXTURE_1D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_1D_ARRAY, GL_TEXTURE_WRAP_S, GL_MIRRORED_REPEAT);
+    return tex;
+}
+
+// texture.lean's sampler: the LEAN moment pyramid of the same store image, in LeanPyramid's GLSL layout
+// (core/texture/lean_moments.h glslPackedLevel: all levels uploaded, read with texelFetch).
+unsigned uploadLeanTexture() {
+    static unsigned tex = 0;
+    if (tex) return tex;
+    Fixture& f = fixture();
+    LeanPyramid P = LeanPyramid::fromEncodedPixels(f.store->pixels(f.tex).data(), f.store->width(f.tex),
+                                                   f.store->height(f.tex), f.store->channels(f.tex), false);
+    glGenTextures(1, &tex);
+    glBindTexture(GL_TEXTURE_2D, tex);
+    for (int l = 0; l < P.glslLevels(); ++l) {
+        int w, h;
+        P.glslLevelSize(l, w, h);
+        glTexImage2D(GL_TEXTURE_2D, l, GL_RGBA32F, w, h, 0, GL_RGBA, GL_FLOAT, P.glslPackedLevel(l).data());
+    }
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_BASE_LEVEL, 0);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, P.glslLevels() - 1);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST_MIPMAP_NEAREST);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    return tex;
 }
 
 Vec3 randUnit(std::mt19937& rng) {
@@ -218,7 +261,9 @@ ParityResult runParity(const NodeSpec& s, std::string* failure) {
             if (p.type == TypeDesc::Closure) {
                 for (int c = 0; c < 3; ++c) d[o + c] = rnd(0.f, 1.f);
             } else if (p.type == TypeDesc::String) {
-                d[o] = (s.id == "texture.image") ? 0.f : float(j % int(p.enumValues.size()));
+                // Neighbouring pixels of the parity grid hold unrelated samples, so screen-space finite
+                // differences are meaningless there: quad-derivative modes are pinned to their first value.
+                d[o] = (s.id == "texture.image" || p.name == "derivatives") ? 0.f : float(j % int(p.enumValues.size()));
             } else if (p.type == TypeDesc::Normal3 || (p.type == TypeDesc::Vector3 && p.binding == GeomBinding::T)) {
                 put3(o, randUnit(rng));
             } else {
@@ -247,12 +292,17 @@ ParityResult runParity(const NodeSpec& s, std::string* failure) {
         return res;
     }
     unsigned dataTex = glsltest::glDataTexture(texW, kSamples, packed);
-    unsigned imgTex = s.has(kGlslTexture) ? uploadStoreTexture() : 0;
+    unsigned imgTex = s.id == "texture.lean" ? uploadLeanTexture() : s.has(kGlslTexture) ? uploadStoreTexture() : 0;
+    unsigned glintTex = s.glslSource()->find("spc_glint_dictionary") != std::string::npos ? uploadGlintDictionary() : 0;
     std::vector<float> gpu = glsltest::glRun(prog, outW, kSamples, [&] {
         glActiveTexture(GL_TEXTURE0);
         glBindTexture(GL_TEXTURE_2D, dataTex);
         glActiveTexture(GL_TEXTURE1);
         glBindTexture(GL_TEXTURE_2D, imgTex);
+        if (glintTex) {
+            glActiveTexture(GL_TEXTURE15);
+            glBindTexture(GL_TEXTURE_1D_ARRAY, glintTex);
+        }
     });
     glDeleteTextures(1, &dataTex);
     glDeleteProgram(prog);
@@ -312,6 +362,7 @@ ParityResult runParity(const NodeSpec& s, std::string* failure) {
             }
         }
         arena.reset();
+        if (getenv("PDEBUG") && j < 12) { printf("j=%d in:", j); for (int i = 0; i < L.floats; ++i) if (i>=kGeom+6) printf(" %.4g", d[i]); printf("\n cpu:"); for (int i = 0; i < L.outFloats; ++i) printf(" %.5g", cpu[i]); printf("\n gpu:"); for (int i = 0; i < L.outFloats; ++i) printf(" %.5g", gpu[size_t(j) * outW * 4 + i]); printf("\n"); }
         for (int i = 0; i < L.outFloats; ++i) {
             float gv = gpu[size_t(j) * outW * 4 + i], cv = cpu[i];
             float err = std::abs(gv - cv) / std::max(std::abs(cv), kRelFloor);

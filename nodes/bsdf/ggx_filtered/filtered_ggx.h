@@ -1,0 +1,410 @@
+// Filtered GGX (Tokuyoshi & Kaplanyan 2021, "TK21"): GGX with a 2×2 roughness matrix (NDF, Smith Λ, G2, τ clamp),
+// the NDF-filtering variants (K16 slope space, TK21 projected space exact/approx, axis-aligned, isotropic) and a BsdfLobe.
+//
+// Spec: shared/specs/filtered-ggx.md. Everything here is in the local frame of the lobe (z = its normal, x = its
+// tangent t, y = its bitangent b); screen derivatives are "per one-pixel step" along screen x (u) and y (v).
+// Filter math runs in double (spec §3.3 [S]: "compute in double on the CPU").
+#pragma once
+
+#include "core/render/bsdf.h"
+#include "core/render/lobes/fresnel.h"
+#include "core/render/lobes/ggx.h"
+
+#include <cmath>
+#include <limits>
+
+namespace specula::fggx {
+
+constexpr double kPiD = 3.14159265358979323846;
+constexpr double kDefaultSigma2 = 1.0 / (2.0 * kPiD);  // TK21 App. B: Gaussian pixel filter with peak 1
+constexpr double kDefaultKappa = 0.18;                 // K16 / TK21 Listing 3 clamp
+
+using D2 = glm::dvec2;
+using D3 = glm::dvec3;
+
+// Symmetric 2×2 matrix [[a, c], [c, d]] (roughness matrices, kernels).
+struct Sym2 {
+    double a = 0, c = 0, d = 0;
+    static Sym2 diag(double x, double y) { return {x, 0, y}; }
+    double det() const { return a * d - c * c; }
+    double trace() const { return a + d; }
+    Sym2 operator+(const Sym2& o) const { return {a + o.a, c + o.c, d + o.d}; }
+    Sym2 operator-(const Sym2& o) const { return {a - o.a, c - o.c, d - o.d}; }
+    Sym2 operator*(double s) const { return {a * s, c * s, d * s}; }
+    bool operator==(const Sym2& o) const { return a == o.a && c == o.c && d == o.d; }
+    // adj([[a, c], [c, d]]) = [[d, −c], [−c, a]]  (TK21 A.4)
+    Sym2 adj() const { return {d, -c, a}; }
+    // Eigenvalues, largest first: tr/2 ± sqrt((tr/2)² − det)  (TK21 Eq. 10)
+    double eigMax() const {
+        double h = 0.5 * trace();
+        return h + std::sqrt(std::max(0.0, h * h - det()));
+    }
+    double eigMin() const {
+        double h = 0.5 * trace();
+        return h - std::sqrt(std::max(0.0, h * h - det()));
+    }
+    // Quadratic form vᵀ M v.
+    double quad(double x, double y) const { return a * x * x + 2.0 * c * x * y + d * y * y; }
+};
+
+// Symmetric matrix product X Y X for symmetric X, Y (used by the first-order analysis of Eq. 8).
+inline Sym2 sandwich(const Sym2& X, const Sym2& Y) {
+    // X Y = [[xa ya + xc yc, xa yc + xc yd], [xc ya + xd yc, xc yc + xd yd]]
+    double p = X.a * Y.a + X.c * Y.c, q = X.a * Y.c + X.c * Y.d;
+    double r = X.c * Y.a + X.d * Y.c, s = X.c * Y.c + X.d * Y.d;
+    return {p * X.a + q * X.c, p * X.c + q * X.d, r * X.c + s * X.d};
+}
+
+// Clamps the eigenvalues of a symmetric non-negative definite K at kappa (spec §3.5, option clamp_full_kernel).
+inline Sym2 clampEigen(const Sym2& K, double kappa) {
+    double l1 = K.eigMax(), l2 = K.eigMin();
+    if (l1 <= kappa) return K;
+    double c1 = std::min(l1, kappa), c2 = std::min(std::max(l2, 0.0), kappa);
+    // Eigenvector of l1: (c, l1 − a) or (l1 − d, c).
+    double vx = K.c, vy = l1 - K.a;
+    if (std::abs(vx) + std::abs(vy) < 1e-300) vx = l1 - K.d, vy = K.c;
+    double n2 = vx * vx + vy * vy;
+    if (!(n2 > 0)) return Sym2::diag(c1, c1);  // isotropic: any basis
+    vx /= std::sqrt(n2), vy /= std::sqrt(n2);
+    // c1 v vᵀ + c2 (I − v vᵀ)
+    return {c2 + (c1 - c2) * vx * vx, (c1 - c2) * vx * vy, c2 + (c1 - c2) * vy * vy};
+}
+
+// ---- Non-axis-aligned GGX with roughness matrix A (TK21 §2.1, App. A) ----------------------------------------------
+
+// D(h) = χ⁺(h_z) / (π sqrt(det A) (h⊥ᵀ A⁻¹ h⊥ + h_z²)²)   (TK21 Eq. 1) with the determinant clamp of A.4:
+// sqrt(max(det A, τ)) and A⁻¹ = adj(A) / max(det A, τ).
+inline double ndf(const D3& h, const Sym2& A, double tau) {
+    if (h.z <= 0.0) return 0.0;
+    double det = std::max(A.det(), tau);
+    double e = A.adj().quad(h.x, h.y) / det + h.z * h.z;
+    return 1.0 / (kPiD * std::sqrt(det) * e * e);
+}
+
+// Smith Λ(w) = −1/2 + sqrt(w⊥ᵀ A w⊥ + w_z²) / (2|w_z|)   (TK21 A.3; Λ uses A, the NDF uses A⁻¹)
+inline double lambda(const D3& w, const Sym2& A) {
+    double z2 = w.z * w.z;
+    if (z2 <= 0.0) return 1e300;
+    return 0.5 * (-1.0 + std::sqrt(1.0 + std::max(0.0, A.quad(w.x, w.y)) / z2));
+}
+inline double g1(const D3& w, const Sym2& A) { return 1.0 / (1.0 + lambda(w, A)); }
+// Height-correlated G2 = 1 / (1 + Λ(i) + Λ(o))   (Heitz 2014, Eq. 99)
+inline double g2(const D3& wo, const D3& wi, const Sym2& A) { return 1.0 / (1.0 + lambda(wo, A) + lambda(wi, A)); }
+
+// Lower Cholesky factor L of A = L Lᵀ: [[l11, 0], [l21, l22]].
+struct Chol2 {
+    double l11 = 1, l21 = 0, l22 = 1;
+};
+inline Chol2 cholesky(const Sym2& A) {
+    Chol2 L;
+    L.l11 = std::sqrt(std::max(A.a, 1e-300));
+    L.l21 = A.c / L.l11;
+    L.l22 = std::sqrt(std::max(A.d - L.l21 * L.l21, 1e-300));
+    return L;
+}
+
+// Visible-normal sampling of the matrix GGX (spec §2 [S]): o_s = normalize(Lᵀ o⊥, o_z), draw an α = 1 visible
+// normal around o_s (Heitz 2018), map back with m = normalize(L m₁⊥, m₁_z). Slopes transform as s = L s₁, so the
+// α = 1 slope distribution P(·, I) becomes P(·, L Lᵀ = A) (TK21 Eq. 5 notation), and o·m ∝ (Lᵀ o⊥)·m₁⊥ + o_z m₁_z.
+inline D3 sampleVisibleNormal(const D3& wo, const Vec2& u, const Chol2& L) {
+    D3 os(L.l11 * wo.x + L.l21 * wo.y, L.l22 * wo.y, wo.z);
+    os = glm::normalize(os);
+    Vec3 m1 = ggx::sampleVisibleNormal(Vec3(os), u, 1.f, 1.f);
+    D3 m(L.l11 * m1.x, L.l21 * m1.x + L.l22 * m1.y, m1.z);
+    return glm::normalize(m);
+}
+
+// D_wo(h) = G1(wo) max(0, wo·h) D(h) / wo_z   (Heitz 2018, Eq. 1; same Ā, τ in G1 and D)
+inline double visibleNdf(const D3& wo, const D3& h, const Sym2& A, double tau) {
+    double woh = glm::dot(wo, h);
+    if (woh <= 0.0 || wo.z <= 0.0) return 0.0;
+    return g1(wo, A) * woh * ndf(h, A, tau) / wo.z;
+}
+
+// ---- Filters (TK21 §3–5) -------------------------------------------------------------------------------------------
+
+enum class Filter : int { None = 0, Slope, Projected, ProjectedApprox, IsoMax, IsoSum, IsoMean, IsoRect };
+enum class Kernel : int { Full = 0, AxisAligned };
+constexpr int kFilterCount = 8;
+inline const char* filterName(Filter f) {
+    static const char* n[] = {"none", "slope", "projected", "projected_approx", "iso_max", "iso_sum", "iso_mean", "iso_rect"};
+    return n[int(f)];
+}
+inline bool isHalfVectorFilter(Filter f) { return f == Filter::Slope || f == Filter::Projected || f == Filter::ProjectedApprox; }
+
+struct FilterParams {
+    Filter filter = Filter::ProjectedApprox;
+    Kernel kernel = Kernel::AxisAligned;
+    double sigma2 = kDefaultSigma2;
+    double kappa = kDefaultKappa;
+    bool clampFullKernel = false;  // clamp the eigenvalues of 2Σ at κ for kernel = full (spec §3.5 [S])
+};
+
+// Σ(q) = σ² (Δ_u q Δ_u qᵀ + Δ_v q Δ_v qᵀ)   (K16 Σ∥; TK21 Eq. 3 Σ⊥)
+inline Sym2 kernelOf(const D2& du, const D2& dv, double sigma2) {
+    return {sigma2 * (du.x * du.x + dv.x * dv.x), sigma2 * (du.x * du.y + dv.x * dv.y), sigma2 * (du.y * du.y + dv.y * dv.y)};
+}
+
+inline double saturate(double x) { return std::min(std::max(x, 0.0), 1.0); }
+
+// Eq. 2 (K16, q = h∥) and Eq. 9 (TK21 projected_approx, q = h⊥): Ā = A + 2Σ(q) for the full kernel; the
+// axis-aligned kernel (Listing 3) adds min(2σ² fwidth(q)², κ) per axis and saturates (diagonal stays diagonal).
+inline Sym2 filterAdditive(const Sym2& A, const D2& du, const D2& dv, const FilterParams& p) {
+    if (p.kernel == Kernel::Full) {
+        Sym2 K = kernelOf(du, dv, p.sigma2) * 2.0;
+        if (p.clampFullKernel) K = clampEigen(K, p.kappa);
+        return A + K;
+    }
+    double wx = std::abs(du.x) + std::abs(dv.x), wy = std::abs(du.y) + std::abs(dv.y);  // fwidth
+    double kx = std::min(2.0 * p.sigma2 * wx * wx, p.kappa), ky = std::min(2.0 * p.sigma2 * wy * wy, p.kappa);
+    return {saturate(A.a + kx), A.c, saturate(A.d + ky)};
+}
+
+// B = A (I − A)⁻¹ = (A⁻¹ − I)⁻¹   (TK21 Eq. 4); diagonal A: b = α²/(1 − α²).
+inline Sym2 projectedRoughness(const Sym2& A) {
+    Sym2 IA{1.0 - A.a, -A.c, 1.0 - A.d};
+    double det = IA.det();
+    Sym2 inv = IA.adj() * (1.0 / det);
+    // A inv (symmetric because A and (I − A)⁻¹ commute)
+    return {A.a * inv.a + A.c * inv.c, A.a * inv.c + A.c * inv.d, A.c * inv.c + A.d * inv.d};
+}
+
+// Exact projected-space filtering, TK21 Eqs. 4–7 in the App. D form (Listing 1 semantics):
+//   B̄ = B + K,  d = max(det B̄, det B),  M = B̄/d + I,  Ā = M / max(det M, 1)
+// with K = 2Σ⊥ (full kernel) or diag(min(2σ² fwidth(h⊥)², κ)) (axis-aligned; spec §3.5: b̄ = b + k', ᾱ² = b̄/(1 + b̄)).
+// Fallbacks (spec §3.3 [S]): K = 0 → A exactly; λ_max(A) ≥ 0.998 (α ≥ 0.999) or an underflowing det B̄ → Eq. 9.
+inline Sym2 filterProjected(const Sym2& A, const D2& du, const D2& dv, const FilterParams& p) {
+    Sym2 K;
+    if (p.kernel == Kernel::Full) {
+        K = kernelOf(du, dv, p.sigma2) * 2.0;
+        if (p.clampFullKernel) K = clampEigen(K, p.kappa);
+    } else {
+        double wx = std::abs(du.x) + std::abs(dv.x), wy = std::abs(du.y) + std::abs(dv.y);
+        K = Sym2::diag(std::min(2.0 * p.sigma2 * wx * wx, p.kappa), std::min(2.0 * p.sigma2 * wy * wy, p.kappa));
+    }
+    if (K.a == 0.0 && K.c == 0.0 && K.d == 0.0) return A;
+    if (A.eigMax() >= 0.998 || !(A.det() > 0.0)) return filterAdditive(A, du, dv, p);
+    Sym2 B = projectedRoughness(A);
+    Sym2 Bb = B + K;                              // Eq. 6: B̄ = B + 2Σ⊥
+    double d = std::max(Bb.det(), B.det());       // App. D lower clamp (exact arithmetic: det B̄ ≥ det B)
+    if (!(d > 1e-280)) return filterAdditive(A, du, dv, p);
+    Sym2 M = Bb * (1.0 / d) + Sym2::diag(1.0, 1.0);
+    return M * (1.0 / std::max(M.det(), 1.0));    // Eq. 7: Ā = (B̄⁻¹ + I)⁻¹ = M / det M
+}
+
+// Eq. 7 literally, (B̄⁻¹ + I)⁻¹, for tests of the App. D rewriting.
+inline Sym2 unprojectRoughness(const Sym2& Bb) {
+    Sym2 Binv = Bb.adj() * (1.0 / Bb.det());
+    Sym2 M = Binv + Sym2::diag(1.0, 1.0);
+    return M.adj() * (1.0 / M.det());
+}
+
+// Normal-based isotropic variants (TK21 §5), from the world- (or any orthonormal-) space normal derivatives Δ_u n,
+// Δ_v n and, for iso_rect, the tangent-plane components of the slope derivative of the normal. Returns the kernel
+// roughness² k ≥ 0 added to both axes (ᾱ² = α² + k, saturated):
+//   iso_max  (Eq. 10): min(2 λ_max(Σ⊥), κ), Σ⊥ eigenvalues = σ² × eigenvalues of the Gram matrix of Δn (spec §3.6 [S])
+//   iso_sum  (Eq. 13): min(2σ² (‖Δ_u n‖² + ‖Δ_v n‖²), κ)
+//   iso_mean (Eq. 14): min(σ² (‖Δ_u n‖² + ‖Δ_v n‖²), κ)
+//   iso_rect (K16 Listing 4): min(2σ² w², κ), w = max component of fwidth of the normal's tangent-space slope
+inline double isotropicKernel(Filter f, const D3& dnu, const D3& dnv, const FilterParams& p) {
+    double uu = glm::dot(dnu, dnu), vv = glm::dot(dnv, dnv), uv = glm::dot(dnu, dnv);
+    switch (f) {
+        case Filter::IsoMax: return std::min(2.0 * p.sigma2 * Sym2{uu, uv, vv}.eigMax(), p.kappa);
+        case Filter::IsoSum: return std::min(2.0 * p.sigma2 * (uu + vv), p.kappa);
+        case Filter::IsoMean: return std::min(p.sigma2 * (uu + vv), p.kappa);
+        case Filter::IsoRect: {
+            // Slope of n in the local frame: (n_x, n_y)/n_z; at n = z its derivative is (Δn_x, Δn_y).
+            double w = std::max(std::abs(dnu.x) + std::abs(dnv.x), std::abs(dnu.y) + std::abs(dnv.y));
+            return std::min(2.0 * p.sigma2 * w * w, p.kappa);
+        }
+        default: return 0.0;
+    }
+}
+inline Sym2 filterIsotropic(const Sym2& A, double k) { return k == 0.0 ? A : Sym2{saturate(A.a + k), A.c, saturate(A.d + k)}; }
+
+// ---- Half-vector derivatives (spec §5.1) ---------------------------------------------------------------------------
+
+// Screen-space differentials of the shading point in the lobe's local frame (per one-pixel step along x, y).
+struct Differentials {
+    bool valid = false;
+    D3 dwo[2]{};  // dwo/dx, dwo/dy
+    D3 dn[2]{};   // dn/dx, dn/dy (of the shading normal; ⊥ n)
+    D3 dp[2]{};   // dp/dx, dp/dy
+};
+
+// One neighbour of a 2×2 quad (CPU emulation of GPU dFdxFine/dFdyFine, spec §5.2), in this lobe's local frame.
+struct QuadNeighbour {
+    bool valid = false;
+    double sign = 1.0;   // Δ = sign·(q(neighbour) − q(self)): +1 when this pixel is the quad's x0 (or y0)
+    D3 dp{0.0};          // p(neighbour) − p(self)
+    D3 wo{0.0};          // its view direction
+    D3 t{1, 0, 0}, b{0, 1, 0}, n{0, 0, 1};  // its shading frame
+};
+
+// d wi / dx for a light sample at finite distance: −P(wi) dp/dx / |y − p|; zero for directional lights, environment
+// and BSDF-sampled directions (invDist = 0).
+inline D3 lightDirectionDerivative(const D3& wi, const D3& dp, double invDist) {
+    if (invDist == 0.0) return D3(0.0);
+    return -(dp - wi * glm::dot(wi, dp)) * invDist;
+}
+
+// q = h⊥ (projected, TK21 Eq. 3 / reading (a) of Listing 2) or h∥ = −h⊥/h_z (slope, K16 / reading (b)) for a
+// half vector expressed in the frame (t, b, n).
+inline D2 halfVectorQ(const D3& h, const D3& t, const D3& b, const D3& n, bool slope) {
+    D2 q(glm::dot(h, t), glm::dot(h, b));
+    if (!slope) return q;
+    double hz = glm::dot(h, n);
+    return -q / std::max(std::abs(hz), 1e-12);
+}
+
+// Analytic Δ_k q from the ray differentials (spec §5.1): dh = P(h)(dwo + dwi)/|H|,
+// Δh⊥ = (dh·t − h_z dn·t, dh·b − h_z dn·b), Δh∥ = −(Δh⊥ h_z − h⊥ dh_z)/h_z² with dh_z = dh·n + h·dn.
+inline void halfVectorDeltasAnalytic(const D3& wo, const D3& wi, const Differentials& df, double invLightDist, bool slope,
+                                     D2 out[2]) {
+    D3 H = wo + wi;
+    double len = glm::length(H);
+    D3 h = H / len;
+    for (int k = 0; k < 2; ++k) {
+        D3 dH = df.dwo[k] + lightDirectionDerivative(wi, df.dp[k], invLightDist);
+        D3 dh = (dH - h * glm::dot(h, dH)) / len;
+        D2 dperp(dh.x - h.z * df.dn[k].x, dh.y - h.z * df.dn[k].y);
+        if (!slope) {
+            out[k] = dperp;
+        } else {
+            double dhz = dh.z + glm::dot(h, df.dn[k]);
+            double hz = std::max(h.z, 1e-12);
+            out[k] = -(dperp * hz - D2(h.x, h.y) * dhz) / (hz * hz);
+        }
+    }
+}
+
+// Quad Δ_k q (spec §5.2): q evaluated at the neighbour pixel with its own wo, wi (same light sample position) and
+// frame, minus q here; fine rule via QuadNeighbour::sign.
+inline bool halfVectorDeltaQuad(const D3& wi, const D2& qSelf, const QuadNeighbour& nb, double invLightDist, bool slope, D2& out) {
+    if (!nb.valid) return false;
+    D3 wiN = wi;
+    if (invLightDist != 0.0) wiN = glm::normalize(wi / invLightDist - nb.dp);
+    D3 H = nb.wo + wiN;
+    double len = glm::length(H);
+    if (!(len > 0.0)) return false;
+    D2 qN = halfVectorQ(H / len, nb.t, nb.b, nb.n, slope);
+    out = (qN - qSelf) * nb.sign;
+    return true;
+}
+
+// ---- The lobe ------------------------------------------------------------------------------------------------------
+
+// Everything a FilteredGgxLobe needs besides (wo, wi): the unfiltered roughness matrix, the filter, derivatives.
+struct LobeSetup {
+    Sym2 A = Sym2::diag(0.01, 0.01);  // unfiltered roughness matrix (A + 2Σ_LEAN allowed)
+    FilterParams params;
+    Differentials diff;               // analytic derivatives (spec §5.1)
+    bool quad = false;                // use quad neighbours (spec §5.2) where valid, analytic otherwise
+    QuadNeighbour nb[2];
+    const float* lightDistance = nullptr;  // distance of the current light sample (inf / null: directional)
+};
+
+// GGX reflection with a filtered roughness matrix Ā(wo, wi). eval returns f·cos = F(wo·h) D_Ā(h) G2_Ā(wo, wi)/(4 wo_z).
+// Half-vector filters depend on wi, so the lobe samples a fixed matrix Ā_s (the filter evaluated at the mirror
+// configuration h = n with a directional light) and pdf() returns exactly the density of that sampling: the
+// estimator stays unbiased under MIS for any Ā(wo, wi) (support is the whole hemisphere). Normal-based filters
+// and `none` give Ā independent of wi, so there Ā_s = Ā and sampling is the lobe's exact VNDF.
+class FilteredGgxLobe final : public BsdfLobe {
+public:
+    FilteredGgxLobe(const LobeSetup& s, const Fresnel& fresnel, const Color3& tint = Color3(1.f))
+        : s_(s), fresnel_(fresnel), tint_(tint) {
+        // τ = det of the unfiltered matrix (A.4; det Ā ≥ det A must hold).
+        tau_ = std::max(s_.A.det(), 1e-300);
+        const Filter f = s_.params.filter;
+        halfVector_ = isHalfVectorFilter(f) && (s_.diff.valid || s_.quad);
+        fixed_ = s_.A;
+        if (f != Filter::None && !isHalfVectorFilter(f) && (s_.diff.valid || s_.quad)) {
+            D3 dn[2] = {s_.diff.valid ? s_.diff.dn[0] : D3(0.0), s_.diff.valid ? s_.diff.dn[1] : D3(0.0)};
+            for (int k = 0; k < 2; ++k)
+                if (s_.quad && s_.nb[k].valid) dn[k] = (s_.nb[k].n - D3(0, 0, 1)) * s_.nb[k].sign;
+            fixed_ = filterIsotropic(s_.A, isotropicKernel(f, dn[0], dn[1], s_.params));
+        }
+        sampling_ = fixed_;
+        samplingL_ = cholesky(sampling_);
+    }
+
+    LobeKind kind() const override { return LobeKind::Specular; }
+
+    // Ā for (wo, wi) (spec §3): the filtered matrix the NDF and G2 use.
+    // useQuad = false: analytic derivatives only (the sampling matrix).
+    Sym2 filtered(const D3& wo, const D3& wi, double invLightDist, bool useQuad = true) const {
+        if (!halfVector_) return fixed_;
+        const bool slope = s_.params.filter == Filter::Slope;
+        D2 dq[2] = {D2(0.0), D2(0.0)};
+        if (s_.diff.valid) halfVectorDeltasAnalytic(wo, wi, s_.diff, invLightDist, slope, dq);
+        if (s_.quad && useQuad) {
+            D3 H = wo + wi;
+            D2 qSelf = halfVectorQ(H / glm::length(H), D3(1, 0, 0), D3(0, 1, 0), D3(0, 0, 1), slope);
+            for (int k = 0; k < 2; ++k) halfVectorDeltaQuad(wi, qSelf, s_.nb[k], invLightDist, slope, dq[k]);
+        }
+        if (s_.params.filter == Filter::Projected) return filterProjected(s_.A, dq[0], dq[1], s_.params);
+        return filterAdditive(s_.A, dq[0], dq[1], s_.params);
+    }
+
+    Color3 eval(const Vec3& wof, const Vec3& wif) const override {
+        if (wof.z <= 0.f || wif.z <= 0.f) return Color3(0.f);
+        D3 wo(wof), wi(wif);
+        D3 H = wo + wi;
+        double len = glm::length(H);
+        if (len == 0.0) return Color3(0.f);
+        D3 h = H / len;
+        Sym2 Ab = filtered(wo, wi, invLightDistance());
+        double d = ndf(h, Ab, tau_);
+        double g = g2(wo, wi, Ab);
+        float v = float(d * g / (4.0 * wo.z));
+        return tint_ * fresnel_.eval(float(glm::dot(wo, h))) * v;
+    }
+    // pdf = D_wo(h; Ā_s) / (4 wo·h)
+    float pdf(const Vec3& wof, const Vec3& wif) const override {
+        if (wof.z <= 0.f || wif.z <= 0.f) return 0.f;
+        D3 wo(wof), wi(wif);
+        D3 H = wo + wi;
+        double len = glm::length(H);
+        if (len == 0.0) return 0.f;
+        D3 h = H / len;
+        double woh = glm::dot(wo, h);
+        if (woh <= 0.0) return 0.f;
+        return float(visibleNdf(wo, h, sampling_, tau_) / (4.0 * woh));
+    }
+    bool sample(const Vec3& wof, const Vec2& u, Vec3& wi) const override {
+        if (wof.z <= 0.f) return false;
+        D3 wo(wof);
+        D3 m = sampleVisibleNormal(wo, u, samplingL_);
+        D3 r = 2.0 * glm::dot(wo, m) * m - wo;
+        wi = Vec3(r);
+        return wi.z > 0.f;
+    }
+    Color3 albedo(const Vec3& wo) const override { return tint_ * fresnel_.eval(std::max(wo.z, 0.f)); }
+
+    const Sym2& unfiltered() const { return s_.A; }
+    const Sym2& samplingMatrix() const { return sampling_; }
+    double tau() const { return tau_; }
+    // Filtered matrix at the mirror configuration (the sampling matrix; debug output filtered_alpha).
+    void setSamplingFromMirror(const D3& wo) {
+        if (!halfVector_ || wo.z <= 0.0) return;
+        D3 wi(-wo.x, -wo.y, wo.z);
+        sampling_ = filtered(wo, wi, 0.0, false);
+        samplingL_ = cholesky(sampling_);
+    }
+
+private:
+    double invLightDistance() const {
+        if (!s_.lightDistance) return 0.0;
+        float dist = *s_.lightDistance;
+        return (std::isfinite(dist) && dist > 0.f) ? 1.0 / double(dist) : 0.0;
+    }
+    LobeSetup s_;
+    Fresnel fresnel_;
+    Color3 tint_;
+    double tau_ = 0;
+    bool halfVector_ = false;
+    Sym2 fixed_, sampling_;
+    Chol2 samplingL_;
+};
+
+}  // namespace specula::fggx

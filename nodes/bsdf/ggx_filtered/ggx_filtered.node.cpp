@@ -1,0 +1,102 @@
+// bsdf.ggx_filtered: GGX reflection whose roughness matrix is widened per pixel from screen-space derivatives
+// (NDF filtering for geometric specular anti-aliasing, Tokuyoshi & Kaplanyan 2021; spec shared/specs/filtered-ggx.md).
+// Math and lobe: filtered_ggx.h. The roughness matrix is A = diag(α_x², α_y²) + 2Σ (Σ: e.g. LEAN slope covariance),
+// τ = det A (A.4). Derivatives: "analytic" from the ShadingPoint's ray differentials (§5.1), "quad" from the renderer's
+// 2×2-quad emulation (render setting "derivatives": "quad", §5.2) and dFdxFine/dFdyFine in GLSL.
+#include "nodes/node_common.h"
+
+#include "core/graph/closure_util.h"
+#include "core/render/shading.h"
+#include "nodes/bsdf/ggx_filtered/filtered_ggx.h"
+
+namespace specula::nodes {
+namespace {
+
+using namespace specula::fggx;
+
+enum In { kWeight, kAlpha, kCovariance, kFilter, kKernel, kSigma2, kKappa, kDerivatives, kDerivScale, kF0, kNormal, kTangent };
+
+// A = diag(α_x², α_y²) + 2Σ with Σ made positive semi-definite (|Σ_xy| ≤ sqrt(Σ_xx Σ_yy)); α clamped to
+// [1e-4, 0.999] (the projected variants need α < 1, spec §3.3).
+Sym2 roughnessMatrix(Vec2 alpha, Vec3 cov) {
+    double ax = std::clamp(double(alpha.x), 1e-4, 0.999), ay = std::clamp(double(alpha.y), 1e-4, 0.999);
+    double sxx = std::max(double(cov.x), 0.0), syy = std::max(double(cov.z), 0.0);
+    double lim = std::sqrt(sxx * syy);
+    double sxy = std::clamp(double(cov.y), -lim, lim);
+    return {ax * ax + 2.0 * sxx, 2.0 * sxy, ay * ay + 2.0 * syy};
+}
+
+void cpu(EvalContext& c, const Instr& i) {
+    LobeSetup s;
+    s.A = roughnessMatrix(inV2(c, i, kAlpha), inV3(c, i, kCovariance));
+    // Port enum order (default first) -> filtered_ggx.h enums.
+    static const Filter kFilters[] = {Filter::ProjectedApprox, Filter::None,    Filter::Slope,  Filter::Projected,
+                                      Filter::IsoMax,          Filter::IsoSum,  Filter::IsoMean, Filter::IsoRect};
+    s.params.filter = kFilters[inEnum(i, kFilter)];
+    s.params.kernel = inEnum(i, kKernel) == 0 ? Kernel::AxisAligned : Kernel::Full;
+    s.params.sigma2 = std::max(double(inF(c, i, kSigma2)), 0.0);
+    s.params.kappa = std::max(double(inF(c, i, kKappa)), 0.0);
+    const bool quad = inEnum(i, kDerivatives) == 1;
+    const double scale = inF(c, i, kDerivScale);
+    Frame f = bsdfFrame(inV3(c, i, kNormal), inV3(c, i, kTangent));
+    auto loc = [&](const Vec3& v) { return D3(f.toLocal(v)); };
+    const ShadingPoint* sp = c.sp;
+    if (sp && sp->hasDifferentials) {
+        s.diff.valid = true;
+        s.diff.dwo[0] = loc(sp->dwodx) * scale, s.diff.dwo[1] = loc(sp->dwody) * scale;
+        s.diff.dn[0] = loc(sp->dndx) * scale, s.diff.dn[1] = loc(sp->dndy) * scale;
+        s.diff.dp[0] = loc(sp->dpdx) * scale, s.diff.dp[1] = loc(sp->dpdy) * scale;
+    }
+    if (sp && quad) {
+        for (int k = 0; k < 2; ++k) {
+            const ShadingPoint::QuadNeighbour& q = sp->quad[k];
+            if (!q.valid) continue;
+            s.quad = true;
+            QuadNeighbour& nb = s.nb[k];
+            nb.valid = true;
+            nb.sign = q.sign * scale;
+            nb.dp = loc(q.p - sp->p), nb.wo = loc(q.wo);
+            nb.t = loc(q.frame.t), nb.b = loc(q.frame.b), nb.n = loc(q.frame.n);
+        }
+    }
+    if (sp) s.lightDistance = &sp->lightDistance;
+    Vec3 f0 = inV3(c, i, kF0);
+    auto* lobe = c.arena->make<FilteredGgxLobe>(s, Fresnel::schlick(f0));
+    if (sp) lobe->setSamplingFromMirror(loc(sp->wo));
+    const Sym2& As = lobe->samplingMatrix();
+    outV2(c, i, 1, Vec2(float(std::sqrt(As.a)), float(std::sqrt(As.d))));
+    emitLobe(c, i, 0, f, inV3(c, i, kWeight), lobe);
+}
+
+void reg(NodeRegistry& r) {
+    NodeSpec s;
+    s.id = "bsdf.ggx_filtered";
+    s.category = "bsdf";
+    s.doc = "GGX reflection with NDF filtering for specular anti-aliasing (Tokuyoshi & Kaplanyan 2021): roughness matrix, "
+            "height-correlated Smith G2, slope-space (K16), projected-space exact/approximate and isotropic filters.";
+    s.inputs = {
+        std::move(PortSpec::c3("weight", Vec3(1.f), "tint / layer weight")).range(0.f, 1.f),
+        std::move(PortSpec::v2("alpha", Vec2(0.05f), "unfiltered GGX α along tangent (x) and bitangent (y)")).range(0.02f, 0.9f),
+        std::move(PortSpec::v3("covariance", Vec3(0.f), "slope covariance Σ (xx, xy, yy) added as A + 2Σ (e.g. LEAN)")).range(0.f, 0.01f),
+        PortSpec::choice("filter", {"projected_approx", "none", "slope", "projected", "iso_max", "iso_sum", "iso_mean", "iso_rect"},
+                         "NDF filter (spec §3): projected_approx = TK21 Eq. 9 (Listing 2 reading (a)); slope = K16 (reading (b))"),
+        PortSpec::choice("kernel", {"axis_aligned", "full"}, "half-vector filters: bounding rectangle with κ clamp, or full Σ"),
+        std::move(PortSpec::f("sigma2", float(kDefaultSigma2), "pixel-filter variance σ² (0.25 reproduces K16/TK19)")).range(0.05f, 0.5f),
+        std::move(PortSpec::f("kappa", float(kDefaultKappa), "kernel clamp κ (axis-aligned and isotropic filters)")).range(0.f, 1.f),
+        PortSpec::choice("derivatives", {"analytic", "quad"}, "analytic: ray differentials; quad: 2×2 finite differences (dFdxFine)"),
+        std::move(PortSpec::f("derivative_scale", 1.f, "multiplies every screen derivative")).range(0.f, 2.f),
+        std::move(PortSpec::c3("f0", Vec3(0.04f), "Schlick F0 (1 = no Fresnel)")).range(0.f, 1.f),
+        std::move(PortSpec::n3("normal", Vec3(0, 0, 1), "shading normal")).bind(GeomBinding::N),
+        std::move(PortSpec::v3("tangent", Vec3(1, 0, 0), "tangent: direction of α_x")).bind(GeomBinding::T)};
+    s.outputs = {PortSpec::out("bsdf", TypeDesc::Closure, "the specular closure"),
+                 PortSpec::out("filtered_alpha", TypeDesc::Vec2, "sqrt of diag(Ā) at the mirror configuration (debug)")};
+    s.flags = kGlslDirections | kGlslShading | kNeedsDerivatives;
+    s.cpu = &cpu;
+    s.glslFunction = "spc_bsdf_ggx_filtered";
+    s.glslFile = "bsdf/ggx_filtered/ggx_filtered.glsl";
+    r.add(std::move(s));
+}
+
+}  // namespace
+SPECULA_REGISTER_NODES(reg);
+}  // namespace specula::nodes

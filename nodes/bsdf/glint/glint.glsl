@@ -1,0 +1,233 @@
+// bsdf.glint: f.cos of the procedural glint BRDF (C20) with GGAA and slope correlation (C21), the GLSL twin of
+// nodes/bsdf/glint/glint_bsdf.h (same operations, spec glint-brdf.md §3 S0-S7).
+// Host contract: bind the dictionary at unit 15 as a GL_TEXTURE_1D_ARRAY, RGBA32F, width 64, 1024 layers, MIPs 0..6
+// uploaded from glint::Dictionary::gpuMipRgba(m) (our exact box pyramid, not glGenerateMipmap), MIN_FILTER
+// LINEAR_MIPMAP_LINEAR, MAG_FILTER LINEAR, WRAP_S MIRRORED_REPEAT (C21 supplemental), MAX_LEVEL 6.
+// Layer = k*64 + d/3, channel = d%3 (C20/C21 layout). Without GGAA the level-0 table is read with textureLod.
+layout(binding = 15) uniform sampler1DArray spc_glint_dictionary;
+
+const float SPC_GLINT_SIGMA_O = 0.35355339059327373;
+const float SPC_GLINT_LIM = 1.4142135623730951;  // 4 sigma_o
+
+// Non-axis-aligned Beckmann SDF P_B (spec S7).
+float spc_glint_beckmann(vec2 h, float sx, float sy, float rho, float sq) {
+    float a = h.x / sx, b = h.y / sy;
+    float q = (a * a - 2.0 * rho * a * b + b * b) / (sq * sq);
+    return exp(-0.5 * q) / (2.0 * SPC_PI * sx * sy * sq);
+}
+
+// Hugo-Elias hash (Quilez), clamped to [2^-24, 1 - 2^-24] (spec S4.2).
+float spc_glint_hash(uint n) {
+    n = (n << 13u) ^ n;
+    n = n * (n * n * 15731u + 789221u) + 1376312589u;
+    float u = float(n & 0x7fffffffu) / 2147483647.0;
+    return clamp(u, 5.9604645e-8, 0.99999994);
+}
+
+// Giles (2010) single-precision erfinv.
+float spc_glint_erfinv(float x) {
+    float w = -log((1.0 - x) * (1.0 + x)), p;
+    if (w < 5.0) {
+        w = w - 2.5;
+        p = 2.81022636e-08;
+        p = 3.43273939e-07 + p * w;
+        p = -3.5233877e-06 + p * w;
+        p = -4.39150654e-06 + p * w;
+        p = 0.00021858087 + p * w;
+        p = -0.00125372503 + p * w;
+        p = -0.00417768164 + p * w;
+        p = 0.246640727 + p * w;
+        p = 1.50140941 + p * w;
+    } else {
+        w = sqrt(w) - 3.0;
+        p = -0.000200214257;
+        p = 0.000100950558 + p * w;
+        p = 0.00134934322 + p * w;
+        p = -0.00367342844 + p * w;
+        p = 0.00573950773 + p * w;
+        p = -0.0076224613 + p * w;
+        p = 0.00943887047 + p * w;
+        p = 1.00167406 + p * w;
+        p = 2.83297682 + p * w;
+    }
+    return p * x;
+}
+
+// One marginal d of dictionary level k at u (texture units), unfiltered or with the GGAA gradients (S5.4).
+float spc_glint_marginal(int k, int d, float u, bool ggaa, float g1, float g2) {
+    vec2 tc = vec2(u, float(k * 64 + d / 3));
+    vec4 t = ggaa ? textureGrad(spc_glint_dictionary, tc, g1, g2) : textureLod(spc_glint_dictionary, tc, 0.0);
+    int ch = d - 3 * (d / 3);
+    return ch == 0 ? t.x : (ch == 1 ? t.y : t.z);
+}
+
+struct SpcGlintQuery {
+    float sx, sy, rho, sq, detMinv;
+    float relArea, jitter, lcBase;
+    vec2 mh;
+    bool ggaa;
+    vec2 gx, gy;
+    float pB;
+};
+
+// S4 + S5: SDF of cell (s, t) at level l.
+float spc_glint_cell(SpcGlintQuery q, int l, int s, int t) {
+    uint p = 1u << uint(l);
+    uint S = uint(s) * p + 1549u * uint(t) * p;
+    float uA = spc_glint_hash(13u * S), uZ = spc_glint_hash(2171u * S), uT = spc_glint_hash(S);
+    float uI = spc_glint_hash(16807u * S), uJ = spc_glint_hash(48271u * S);
+    if (uA > q.relArea) return 0.0;
+    float lc = q.lcBase + float(l);
+    float ld = lc + q.jitter * 1.41421356 * spc_glint_erfinv(2.0 * uZ - 1.0);
+    int k = int(clamp(floor(ld + 0.5), 0.0, 16.0));
+    if (k == 16) return q.pB;
+    float theta = 2.0 * SPC_PI * uT;
+    float c = cos(theta), sn = sin(theta);
+    float mx = c * q.mh.x + sn * q.mh.y, my = -sn * q.mh.x + c * q.mh.y;
+    if (abs(mx) >= SPC_GLINT_LIM || abs(my) >= SPC_GLINT_LIM) return 0.0;
+    int i = min(int(192.0 * uI), 191), j = min(int(192.0 * uJ), 191);
+    float ux = abs(mx) / SPC_GLINT_LIM, uy = abs(my) / SPC_GLINT_LIM;
+    float gxx = c * q.gx.x + sn * q.gx.y, gxy = -sn * q.gx.x + c * q.gx.y;
+    float gyx = c * q.gy.x + sn * q.gy.y, gyy = -sn * q.gy.x + c * q.gy.y;
+    float px = spc_glint_marginal(k, i, ux, q.ggaa, gxx, gyx);
+    float py = spc_glint_marginal(k, j, uy, q.ggaa, gxy, gyy);
+    return q.detMinv * px * py;
+}
+
+// S3: EWA weights over the cells of level l (cap: 100 cells).
+float spc_glint_level(SpcGlintQuery q, int l, vec2 uv, vec2 a1, vec2 a2) {
+    float n = float(1 << (15 - l));
+    float cs = uv.x * n - 0.5, ct = uv.y * n - 0.5;
+    vec2 b1 = a1 * n, b2 = a2 * n;
+    float A = b1.y * b1.y + b2.y * b2.y + 1.0;
+    float B = -2.0 * (b1.x * b1.y + b2.x * b2.y);
+    float C = b1.x * b1.x + b2.x * b2.x + 1.0;
+    float F = A * C - B * B * 0.25;
+    A /= F;
+    B /= F;
+    C /= F;
+    float det = 4.0 * A * C - B * B;
+    float invDet = 1.0 / det;
+    float su = 2.0 * invDet * sqrt(det * C), sv = 2.0 * invDet * sqrt(det * A);
+    int s0 = int(ceil(cs - su)), s1 = int(floor(cs + su));
+    int t0 = int(ceil(ct - sv)), t1 = int(floor(ct + sv));
+    float sumW = 0.0, sumWP = 0.0;
+    int count = 0;
+    for (int t = t0; t <= t1 && count < 100; ++t) {
+        float dt = float(t) - ct;
+        for (int s = s0; s <= s1; ++s) {
+            float ds = float(s) - cs;
+            float r2 = A * ds * ds + B * ds * dt + C * dt * dt;
+            if (!(r2 < 1.0)) continue;
+            if (count >= 100) break;
+            ++count;
+            float W = exp(-2.0 * r2) - 0.13533528;
+            sumW += W;
+            sumWP += W * spc_glint_cell(q, l, s, t);
+        }
+    }
+    return sumW > 0.0 ? sumWP / sumW : 0.0;
+}
+
+vec3 spc_glint_frame_rotation(vec2 a, vec3 w) { return vec3(-a.x * w.z, -a.y * w.z, a.x * w.x + a.y * w.y); }
+
+void spc_bsdf_glint(SpeculaShadingInputs s, vec3 wo, vec3 wi, vec3 weight, float sigma_x, float sigma_y, float rho,
+                    float log_density, float relative_area, float density_jitter, float max_anisotropy, int ggaa,
+                    float kernel_scale, int derivative, vec3 f0, vec2 lean_mean, vec3 lean_cov, vec3 normal,
+                    vec3 tangent, vec2 uv, vec2 duvdx, vec2 duvdy, float uv_scale, out SpeculaClosure bsdf) {
+    bsdf.f = vec3(0.0);
+    bsdf.emission = vec3(0.0);
+    float sx = clamp(sigma_x, 0.01, 1.0), sy = clamp(sigma_y, 0.01, 1.0), r = clamp(rho, -0.99, 0.99);
+    vec3 T, B, N;
+    spc_frame(normal, tangent, T, B, N);
+    // S6: LEAN combination and mean-slope frame.
+    float vx = min(lean_cov.x, 1.0), vy = min(lean_cov.y, 1.0);
+    if (vx > 1e-4 && vy > 1e-4) {
+        float snx = sqrt(vx), sny = sqrt(vy);
+        float rn = clamp(lean_cov.z / (snx * sny), -0.99, 0.99);
+        float nsx = sqrt(sx * sx + vx), nsy = sqrt(sy * sy + vy);
+        r = clamp((r * sx * sy + rn * snx * sny) / (nsx * nsy), -0.99, 0.99);
+        sx = clamp(nsx, 0.01, 1.0);
+        sy = clamp(nsy, 0.01, 1.0);
+        vec3 m = normalize(N - lean_mean.x * T - lean_mean.y * B);
+        float cw = dot(m, wo);
+        if (cw < 0.0) m = normalize(m - 1.01 * cw * wo);
+        vec3 Tn = T;
+        spc_frame(m, Tn, T, B, N);
+    }
+    vec3 o = spc_to_local(wo, T, B, N);
+    vec3 i = spc_to_local(wi, T, B, N);
+    // S0 rejections.
+    if (o.z <= 0.0 || i.z <= 0.0) return;
+    vec3 hsum = o + i;
+    float len = sqrt(dot(hsum, hsum));
+    if (!(len > 0.0)) return;
+    vec3 h = hsum / len;
+    float woh = dot(o, h), wih = dot(i, h);
+    if (h.z <= 0.0 || woh <= 0.0 || wih <= 0.0) return;
+
+    SpcGlintQuery q;
+    q.sx = sx;
+    q.sy = sy;
+    q.rho = r;
+    q.sq = sqrt(1.0 - r * r);
+    float mi00 = SPC_GLINT_SIGMA_O / (sx * q.sq), mi01 = -SPC_GLINT_SIGMA_O * r / (sy * q.sq), mi11 = SPC_GLINT_SIGMA_O / sy;
+    q.detMinv = SPC_GLINT_SIGMA_O * SPC_GLINT_SIGMA_O / (sx * sy * q.sq);
+    q.relArea = relative_area;
+    q.jitter = density_jitter;
+    q.lcBase = log_density / 1.38629436 - 15.0;
+    vec2 hs = vec2(-h.x / h.z, -h.y / h.z);
+    q.mh = vec2(mi00 * hs.x + mi01 * hs.y, mi11 * hs.y);
+    q.pB = spc_glint_beckmann(hs, sx, sy, r, q.sq);
+    q.ggaa = ggaa == 0;
+    q.gx = vec2(0.0);
+    q.gy = vec2(0.0);
+    if (q.ggaa) {
+        // Per-pixel dh from the frame rotation (T.dN, B.dN) (C21 §6.1: once per pixel, not per cell).
+        vec2 anx = vec2(dot(T, s.dNdx), dot(B, s.dNdx)), any = vec2(dot(T, s.dNdy), dot(B, s.dNdy));
+        vec3 sx3 = spc_glint_frame_rotation(anx, o) + vec3(0.0) + spc_glint_frame_rotation(anx, i);
+        vec3 sy3 = spc_glint_frame_rotation(any, o) + vec3(0.0) + spc_glint_frame_rotation(any, i);
+        vec3 dhx = (sx3 - h * dot(h, sx3)) / len, dhy = (sy3 - h * dot(h, sy3)) / len;
+        vec2 dx, dy;
+        if (derivative == 0) {  // projected half vector (C21 Eq. 21)
+            dx = dhx.xy;
+            dy = dhy.xy;
+        } else {  // half slope (C21 Eq. 20)
+            float iz2 = 1.0 / (h.z * h.z);
+            dx = vec2(-(dhx.x * h.z - h.x * dhx.z) * iz2, -(dhx.y * h.z - h.y * dhx.z) * iz2);
+            dy = vec2(-(dhy.x * h.z - h.x * dhy.z) * iz2, -(dhy.y * h.z - h.y * dhy.z) * iz2);
+        }
+        float kk = kernel_scale / SPC_GLINT_LIM;
+        q.gx = vec2(mi00 * dx.x + mi01 * dx.y, mi11 * dx.y) * kk;
+        q.gy = vec2(mi00 * dy.x + mi01 * dy.y, mi11 * dy.y) * kk;
+    }
+
+    // S1/S2: footprint and LOD.
+    vec2 J1 = duvdx * uv_scale, J2 = duvdy * uv_scale, suv = uv * uv_scale;
+    float l1 = dot(J1, J1), l2 = dot(J2, J2);
+    vec2 a1 = l1 >= l2 ? J1 : J2, a2 = l1 >= l2 ? J2 : J1;
+    float la1 = sqrt(max(l1, l2)), la2 = sqrt(min(l1, l2));
+    float amax = max(max_anisotropy, 1.0);
+    float P;
+    if (!(la2 > 0.0) || isinf(la1) || isnan(la1)) {
+        P = q.pB;
+    } else {
+        if (la1 > amax * la2) {
+            a2 = a2 * (la1 / (amax * la2));
+            la2 = la1 / amax;
+        }
+        float lodP = clamp(15.0 + log2(la2), 0.0, 15.0);
+        float i0f = floor(lodP);
+        int i0 = int(i0f);
+        float w = lodP - i0f;
+        P = spc_glint_level(q, i0, suv, a1, a2);
+        if (w > 0.0) P = (1.0 - w) * P + w * spc_glint_level(q, min(i0 + 1, 15), suv, a1, a2);
+    }
+    // S7: D = P / h_z^4, V-cavity G, Schlick F at wo.h; returns f cos = F G D / (4 wo.z).
+    float hz2 = h.z * h.z;
+    float D = P / (hz2 * hz2);
+    float G = min(1.0, 2.0 * h.z * o.z / woh) * min(1.0, 2.0 * h.z * i.z / wih);
+    float fc = G * D / (4.0 * o.z);
+    if (!(fc > 0.0)) return;
+    bsdf.f = weight * (spc_fresnel_schlick(woh, f0) * fc);
+}

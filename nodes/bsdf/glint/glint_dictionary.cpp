@@ -1,0 +1,177 @@
+// Glint dictionary generation (spec glint-brdf.md §2.1 with its recommendations: Specula-owned PRNG and normal
+// deviates, texel-centre sampling renormalised exactly, box-filtered MIP chain per row) and its on-disk cache.
+#include "nodes/bsdf/glint/glint_dictionary.h"
+
+#include "core/render/sampler.h"
+
+#include <tbb/parallel_for.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <mutex>
+
+namespace specula::glint {
+
+NormalStream::NormalStream(uint64_t seed) : state_(seed) {}
+
+uint64_t NormalStream::nextU64() {
+    state_ += 0x9E3779B97F4A7C15ULL;  // SplitMix64 (Steele et al. 2014): Weyl step + mix64 finaliser
+    return mix64(state_);
+}
+
+double NormalStream::next() {
+    if (hasSpare_) {
+        hasSpare_ = false;
+        return spare_;
+    }
+    // Box-Muller (1958) in double: u1 in (0, 1] so log(u1) is finite, u2 in [0, 1).
+    const double u1 = double((nextU64() >> 11) + 1) * 0x1.0p-53;
+    const double u2 = double(nextU64() >> 11) * 0x1.0p-53;
+    const double r = std::sqrt(-2.0 * std::log(u1));
+    const double phi = 2.0 * 3.14159265358979323846 * u2;
+    spare_ = r * std::sin(phi);
+    hasSpare_ = true;
+    return r * std::cos(phi);
+}
+
+std::vector<double> dictionaryMeans(int marginal, int count) {
+    NormalStream ns(mix64(kSeed + uint64_t(marginal)));
+    std::vector<double> mu(static_cast<size_t>(count));
+    for (auto& m : mu) m = kSigmaO * ns.next();
+    return mu;
+}
+
+namespace {
+
+constexpr uint32_t kCacheVersion = 1;
+constexpr char kMagic[8] = {'S', 'P', 'G', 'L', 'D', 'I', 'C', 'T'};
+
+uint64_t fnv1a(const void* p, size_t n, uint64_t h = 1469598103934665603ULL) {
+    const auto* b = static_cast<const unsigned char*>(p);
+    for (size_t i = 0; i < n; ++i) h = (h ^ b[i]) * 1099511628211ULL;
+    return h;
+}
+
+// One marginal d: all 16 levels, each 127 floats (spec §2.1 steps 2-4, §2.2 pyramid).
+void generateMarginal(int d, float* out) {
+    const std::vector<double> mu = dictionaryMeans(d, kMeans);
+    const double inv = 1.0 / (kSigmaL * std::sqrt(2.0 * 3.14159265358979323846));
+    const double k2 = -0.5 / (kSigmaL * kSigmaL);
+    const double cut = 8.0 * kSigmaL;  // lobes further than 8 sigma_l contribute < 1e-14 relative
+    double acc[kRes] = {};
+    int done = 0;
+    for (int k = 0; k < kLevels; ++k) {
+        // Level k uses the prefix of 2^k means (nested prefixes: LOD coherence).
+        const int upto = 1 << k;
+        for (; done < upto; ++done) {
+            for (double c : {mu[size_t(done)], -mu[size_t(done)]}) {
+                int lo = std::max(0, int(std::ceil((c - cut) / kDelta - 0.5)));
+                int hi = std::min(kRes - 1, int(std::floor((c + cut) / kDelta - 0.5)));
+                for (int i = lo; i <= hi; ++i) {
+                    const double x = (i + 0.5) * kDelta - c;  // texel-centre convention
+                    acc[i] += inv * std::exp(k2 * x * x);
+                }
+            }
+        }
+        // p_{d,k}(x) = 2^-(k+1) sum_{m<2^k} [g(x - mu_m) + g(x + mu_m)], then the exact renormalisation
+        // 2 * Delta * sum_i p_i = 1 (mirrored-repeat linear interpolation integrates to exactly this).
+        double sum = 0.0;
+        for (int i = 0; i < kRes; ++i) sum += acc[i];
+        const double scale = sum > 0.0 ? 1.0 / (2.0 * kDelta * sum) : 0.0;
+        float* row = out + size_t(k) * kRowFloats;
+        for (int i = 0; i < kRes; ++i) row[i] = float(acc[i] * scale);
+        // Box MIP chain: level m+1 = 2:1 average of level m (keeps 2 Delta_m sum = 1 exactly in exact arithmetic).
+        for (int m = 1; m < kMips; ++m) {
+            const float* src = row + mipOffset(m - 1);
+            float* dst = row + mipOffset(m);
+            for (int i = 0; i < mipRes(m); ++i) dst[i] = float(0.5 * (double(src[2 * i]) + double(src[2 * i + 1])));
+        }
+    }
+}
+
+}  // namespace
+
+Dictionary Dictionary::generate() {
+    auto t0 = std::chrono::steady_clock::now();
+    Dictionary dict;
+    dict.data_.assign(size_t(kLevels) * kMarginals * kRowFloats, 0.f);
+    std::vector<float> perMarginal(size_t(kMarginals) * kLevels * kRowFloats);
+    // Marginals are independent streams, so the parallel loop is deterministic.
+    tbb::parallel_for(0, kMarginals, [&](int d) { generateMarginal(d, perMarginal.data() + size_t(d) * kLevels * kRowFloats); });
+    for (int d = 0; d < kMarginals; ++d)
+        for (int k = 0; k < kLevels; ++k)
+            std::memcpy(dict.data_.data() + (size_t(k) * kMarginals + d) * kRowFloats,
+                        perMarginal.data() + (size_t(d) * kLevels + k) * kRowFloats, kRowFloats * sizeof(float));
+    dict.seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return dict;
+}
+
+uint64_t Dictionary::hash() const { return fnv1a(data_.data(), data_.size() * sizeof(float)); }
+
+std::string Dictionary::cacheDir() {
+    if (const char* e = std::getenv("SPECULA_CACHE_DIR")) return e;
+    if (const char* x = std::getenv("XDG_CACHE_HOME"); x && *x) return std::string(x) + "/specula";
+    if (const char* h = std::getenv("HOME"); h && *h) return std::string(h) + "/.cache/specula";
+    return "";
+}
+
+std::vector<float> Dictionary::gpuMipRgba(int m) const {
+    const int w = mipRes(m);
+    std::vector<float> px(size_t(kGpuLayers) * w * 4, 0.f);
+    for (int k = 0; k < kLevels; ++k)
+        for (int d = 0; d < kMarginals; ++d) {
+            const int layer = k * (kMarginals / 3) + d / 3, ch = d % 3;
+            const float* src = mip(k, d, m);
+            for (int i = 0; i < w; ++i) px[(size_t(layer) * w + i) * 4 + ch] = src[i];
+        }
+    return px;
+}
+
+const Dictionary& Dictionary::instance() {
+    static Dictionary dict;
+    static std::once_flag once;
+    std::call_once(once, [] {
+        auto t0 = std::chrono::steady_clock::now();
+        const size_t n = size_t(kLevels) * kMarginals * kRowFloats;
+        std::string dir = cacheDir();
+        std::string file = dir.empty() ? "" : dir + "/glint_dict_v" + std::to_string(kCacheVersion) + "_16_192_64.bin";
+        if (!file.empty()) {
+            std::ifstream in(file, std::ios::binary);
+            char magic[8];
+            uint64_t stored = 0;
+            std::vector<float> buf(n);
+            if (in.read(magic, 8) && std::memcmp(magic, kMagic, 8) == 0 && in.read(reinterpret_cast<char*>(&stored), 8) &&
+                in.read(reinterpret_cast<char*>(buf.data()), std::streamsize(n * sizeof(float))) &&
+                fnv1a(buf.data(), n * sizeof(float)) == stored) {
+                dict.data_ = std::move(buf);
+                dict.fromCache_ = true;
+                dict.seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+                return;
+            }
+        }
+        dict = generate();
+        if (!file.empty()) {
+            std::error_code ec;
+            std::filesystem::create_directories(dir, ec);
+            // Write to a unique temporary file and rename: concurrent processes never see a partial cache.
+            std::string tmp = file + ".tmp" + std::to_string(uint64_t(std::chrono::steady_clock::now().time_since_epoch().count()));
+            {
+                std::ofstream out(tmp, std::ios::binary);
+                uint64_t h = dict.hash();
+                out.write(kMagic, 8);
+                out.write(reinterpret_cast<const char*>(&h), 8);
+                out.write(reinterpret_cast<const char*>(dict.data_.data()), std::streamsize(n * sizeof(float)));
+            }
+            std::filesystem::rename(tmp, file, ec);
+            if (ec) std::filesystem::remove(tmp, ec);
+        }
+    });
+    return dict;
+}
+
+}  // namespace specula::glint
