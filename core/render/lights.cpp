@@ -121,19 +121,25 @@ EnvironmentLight::EnvironmentLight(std::vector<float> rgb, int width, int height
     dist_ = Distribution2D(f, w_, h_);
 }
 
+// Blender's equirectangular convention (Cycles direction_to_equirectangular): u = 0.5 - atan2(y, -x)/(2π),
+// so the image centre (u = 0.5) looks along -x and u grows clockwise seen from above; v = 0 is +z.
+// 'rotation' turns the map about +z like a Mapping node's Z rotation.
 Vec2 EnvironmentLight::dirToUv(const Vec3& d) const {
-    float phi = std::atan2(d.y, d.x) - rotation_;
-    float u = 0.5f + phi * kInv2Pi;
+    float c = std::cos(rotation_), s = std::sin(rotation_);
+    Vec3 r(c * d.x + s * d.y, -s * d.x + c * d.y, d.z);  // rotate by -rotation
+    float u = 0.5f - std::atan2(r.y, -r.x) * kInv2Pi;
     u -= std::floor(u);
-    float v = std::acos(std::clamp(d.z, -1.f, 1.f)) * kInvPi;  // v = 0 at +z (top row)
+    float v = std::acos(std::clamp(r.z, -1.f, 1.f)) * kInvPi;
     return {u, v};
 }
 
 Vec3 EnvironmentLight::uvToDir(const Vec2& uv) const {
-    float phi = (uv.x - 0.5f) * 2.f * kPi + rotation_;
+    float a = (0.5f - uv.x) * 2.f * kPi;
     float theta = uv.y * kPi;
     float st = std::sin(theta);
-    return {st * std::cos(phi), st * std::sin(phi), std::cos(theta)};
+    Vec3 r(-std::cos(a) * st, std::sin(a) * st, std::cos(theta));
+    float c = std::cos(rotation_), s = std::sin(rotation_);
+    return {c * r.x - s * r.y, s * r.x + c * r.y, r.z};  // rotate by +rotation
 }
 
 Color3 EnvironmentLight::lookup(const Vec2& uv) const {
@@ -157,9 +163,11 @@ bool EnvironmentLight::sample(const Vec3&, const Vec2& u, LightSample& s) const 
     float sinTheta = std::sin(uv.y * kPi);
     if (pdfUv <= 0.f || sinTheta <= 0.f) return false;
     s.wi = uvToDir(uv);
-    s.pdf = pdfUv / (2.f * kPi * kPi * sinTheta);
-    s.L = lookup(uv);
-    return true;
+    // Density and radiance through the same direction -> texel mapping as pdf()/radiance(), so that
+    // MIS weights agree exactly even where float round trips land on a neighbouring texel.
+    s.pdf = pdf(Vec3(0.f), s.wi, 0.f);
+    s.L = lookup(dirToUv(s.wi));
+    return s.pdf > 0.f;
 }
 
 float EnvironmentLight::pdf(const Vec3&, const Vec3& wi, float) const {

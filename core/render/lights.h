@@ -97,7 +97,7 @@ public:
     // Constant environment.
     explicit EnvironmentLight(const Color3& radiance);
     // Equirectangular (lat-long) image, rows top to bottom, 3 floats/pixel, z-up: the top row is +z,
-    // u = 0.5 + atan2(dy, dx)/(2π) after rotating by -rotationDegrees about z; scaled by 'scale'.
+    // u follows Blender/Cycles (u = 0.5 looks along -x), rotated by rotationDegrees about z; scaled by 'scale'.
     EnvironmentLight(std::vector<float> rgb, int width, int height, float rotationDegrees, const Color3& scale);
     bool sample(const Vec3& p, const Vec2& u, LightSample& s) const override;
     float pdf(const Vec3& p, const Vec3& wi, float t) const override;

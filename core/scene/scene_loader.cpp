@@ -240,6 +240,8 @@ void readLight(const Json& j, const std::string& ptr, Context& ctx) {
     if (!j.contains("type")) throw InputError(ptr, "missing required key 'type'");
     std::string type = j.at("type").is_string() ? j.at("type").get<std::string>() : "";
     Scene& s = *ctx.scene;
+    if (j.contains("name") && !j.at("name").is_string())
+        throw InputError(ptr + "/name", "expected a string, got " + jsonTypeName(j.at("name")));
     std::unique_ptr<Light> light;
     if (type == "point") {
         JsonReader r(j, ptr, {"type", "name", "position", "power", "intensity", "color"});
@@ -293,6 +295,7 @@ void readLight(const Json& j, const std::string& ptr, Context& ctx) {
             if (cs.empty()) r.fail("", "missing required key 'colorspace' (textures declare their colorspace)");
             if (cs != "raw" && !s.colorConfig->hasColorspace(cs)) {
                 auto names = s.colorConfig->colorspaces();
+                names.push_back("raw");
                 r.fail("colorspace", "unknown colorspace '" + cs + "'", nearestName(cs, names));
             }
             TextureHandle h;

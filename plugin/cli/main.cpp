@@ -4,6 +4,7 @@
 #include "plugin/cli/graph_commands.h"
 
 #include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
 
 #include <atomic>
 #include <cmath>
@@ -56,6 +57,9 @@ bool parsePair(const std::string& s, char sep, int& a, int& b) {
     char c;
     return (in >> a >> c >> b) && c == sep && in.peek() == EOF;
 }
+
+// A string as a JSON literal (quotes and escapes), for the machine-readable output lines.
+std::string jsonString(const std::string& s) { return nlohmann::json(s).dump(); }
 
 int reportError(const std::exception& e, int code) {
     std::fprintf(stderr, "specula: error: %s\n", e.what());
@@ -154,8 +158,8 @@ int main(int argc, char** argv) {
                 std::fprintf(stderr, "specula: interrupted after %d/%d tiles; partial image written to %s\n", st.tilesDone,
                              st.tilesTotal, partial.c_str());
                 if (mode == "json")
-                    std::printf("{\"event\":\"cancelled\",\"done\":%d,\"total\":%d,\"partial\":\"%s\"}\n", st.tilesDone,
-                                st.tilesTotal, partial.c_str());
+                    std::printf("{\"event\":\"cancelled\",\"done\":%d,\"total\":%d,\"partial\":%s}\n", st.tilesDone,
+                                st.tilesTotal, jsonString(partial).c_str());
                 exitCode = kExitInterrupted;
                 return;
             }
@@ -163,9 +167,9 @@ int main(int argc, char** argv) {
             double sps = st.seconds > 0 ? double(st.samples) / st.seconds : 0.0;
             if (mode == "json")
                 std::printf("{\"event\":\"done\",\"seconds\":%.3f,\"samples\":%llu,\"invalid_samples\":%llu,"
-                            "\"samples_per_second\":%.1f,\"exr\":\"%s\",\"png\":\"%s\"}\n",
+                            "\"samples_per_second\":%.1f,\"exr\":%s,\"png\":%s}\n",
                             st.seconds, (unsigned long long)st.samples, (unsigned long long)st.invalidSamples, sps,
-                            outPath.c_str(), png.c_str());
+                            jsonString(outPath).c_str(), jsonString(png).c_str());
             else
                 std::fprintf(stderr, "specula: rendered %dx%d at %d spp in %s (%.2f Msamples/s); %llu NaN/Inf samples dropped\n"
                                      "specula: wrote %s and %s\n",
@@ -193,8 +197,8 @@ int main(int argc, char** argv) {
                 // JSON has no infinity: identical images report "psnr": null.
                 char psnr[32] = "null";
                 if (std::isfinite(r.psnr)) std::snprintf(psnr, sizeof psnr, "%.6g", r.psnr);
-                std::printf("{\"aov\":\"%s\",\"rmse\":%.9g,\"mae\":%.9g,\"psnr\":%s,\"mean_a\":%.9g,\"mean_b\":%.9g}\n",
-                            aov.c_str(), r.rmse, r.mae, psnr, r.meanA, r.meanB);
+                std::printf("{\"aov\":%s,\"rmse\":%.9g,\"mae\":%.9g,\"psnr\":%s,\"mean_a\":%.9g,\"mean_b\":%.9g}\n",
+                            jsonString(aov).c_str(), r.rmse, r.mae, psnr, r.meanA, r.meanB);
             }
             else
                 std::printf("aov   %s (%dx%d, %d channels)\nRMSE  %.6g\nMAE   %.6g\nPSNR  %.3f dB\n", aov.c_str(), r.width,
