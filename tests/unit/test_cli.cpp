@@ -181,3 +181,33 @@ TEST(Cli, InterruptWritesPartialFileAndNeverClobbersTarget) {
     ImageSet partial = readImageSet(dir + "/target.partial.exr");
     EXPECT_EQ(partial.width, 32);
 }
+
+TEST(Cli, BsdfCommandMatchesTheLambertClosedForm) {
+    std::string dir = test::tempDir("cli");
+    test::writeFile(dir + "/s.json", kSmallScene);
+    std::string out;
+    // Material 'g' is bsdf.diffuse with the default albedo 0.8: f·cos = 0.8/π · cos θi, pdf = cos θi / π.
+    ASSERT_EQ(test::runCli("bsdf " + q(dir + "/s.json") + " --material g --wo 0,0,1 --wi 0.6,0,0.8", &out), 0) << out;
+    auto j = nlohmann::json::parse(out);
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(j["f"][c].get<double>(), 0.8 / M_PI * 0.8, 1e-5);
+    EXPECT_NEAR(j["pdf"].get<double>(), 0.8 / M_PI, 1e-5);
+    // Below the horizon nothing is reflected.
+    ASSERT_EQ(test::runCli("bsdf " + q(dir + "/s.json") + " --material g --wo 0,0,1 --wi 0.6,0,-0.8", &out), 0) << out;
+    EXPECT_EQ(nlohmann::json::parse(out)["pdf"].get<double>(), 0.0);
+}
+
+TEST(Cli, GlslAndPlotCommandsWriteTheirOutputs) {
+    std::string dir = test::tempDir("cli");
+    test::writeFile(dir + "/s.json", kSmallScene);
+    std::string out;
+    ASSERT_EQ(test::runCli("glsl " + q(dir + "/s.json") + " --material m -o " + q(dir + "/m.glsl"), &out), 0) << out;
+    std::string glsl = test::readFile(dir + "/m.glsl");
+    EXPECT_NE(glsl.find("#version 450"), std::string::npos);
+    EXPECT_NE(glsl.find("vec3 specula_eval(SpeculaShadingInputs s, vec3 wo, vec3 wi)"), std::string::npos);
+    EXPECT_NE(glsl.find("bsdf.ggx"), std::string::npos);  // comments name the node ids
+    // An unknown material is bad input with a suggestion, and writes nothing.
+    EXPECT_EQ(test::runCli("glsl " + q(dir + "/s.json") + " --material mm -o " + q(dir + "/x.glsl"), &out), 1) << out;
+    EXPECT_FALSE(fs::exists(dir + "/x.glsl"));
+    ASSERT_EQ(test::runCli("plot " + q(dir + "/s.json") + " --material m --wo 0.3,0,0.95 -o " + q(dir + "/lobe.png"), &out), 0) << out;
+    EXPECT_TRUE(fs::exists(dir + "/lobe.png"));
+}
