@@ -91,6 +91,17 @@ bool Closure::sample(const Vec3& wo, float uLobe, const Vec2& u, BsdfSample& out
     return true;
 }
 
+bool Closure::integratePolygon(const Vec3& wo, const Vec3* vertices, int count, BsdfEval& out) const {
+    BsdfEval sum;
+    for (int i = 0; i < count_; ++i) {
+        Color3 r;
+        if (!lobes_[i]->integratePolygon(wo, vertices, count, r)) return false;
+        (lobes_[i]->kind() == LobeKind::Diffuse ? sum.diffuse : sum.specular) += weights_[i] * r;
+    }
+    out = sum;
+    return count_ > 0;
+}
+
 Color3 Closure::albedo(const Vec3& wo) const {
     Color3 a(0.f);
     for (int i = 0; i < count_; ++i) a += weights_[i] * lobes_[i]->albedo(wo);

@@ -49,8 +49,10 @@ public:
     virtual bool sample(const Vec3& wo, const Vec2& u, Vec3& wi) const = 0;
     // Directional albedo estimate ∫ f cos dwi (used for lobe selection and the albedo AOV).
     virtual Color3 albedo(const Vec3& wo) const = 0;
-    // Hook for analytic integration over a spherical polygon (LTC area lights). The polygon is given
-    // in the local frame (not normalised), radiance L constant over it. Returns false when unsupported.
+    // Hook for analytic integration over a polygonal emitter (LTC area lights, Heitz et al. 2016):
+    // result = ∫_P f(wo, wi) |cos θi| dωi, the polygon's vertices given in the local frame relative to
+    // the shading point (not normalised, counter-clockwise seen from the shading point). The light's
+    // radiance is applied by the caller. Returns false when the lobe has no closed form.
     virtual bool integratePolygon(const Vec3& wo, const Vec3* vertices, int count, Color3& result) const {
         return false;
     }
@@ -111,6 +113,8 @@ public:
     // f·cos and pdf of the whole closure (so MIS with light sampling stays unbiased).
     bool sample(const Vec3& wo, float uLobe, const Vec2& u, BsdfSample& out) const;
     Color3 albedo(const Vec3& wo) const;
+    // Σ weight · lobe.integratePolygon, split by category; false unless every lobe has a closed form.
+    bool integratePolygon(const Vec3& wo, const Vec3* vertices, int count, BsdfEval& out) const;
 
 private:
     void selectionWeights(const Vec3& wo, float* w, float& sum) const;

@@ -46,6 +46,24 @@ void addIndirect(SampleValue& out, const Throughput& beta, const Color3& L, floa
     out.diffuse += d;
     out.specular += s;
 }
+// Shadow ray from a shading point towards a light sample. The origin is offset off the surface, so the
+// ray is re-aimed at the sampled point from the offset origin and stops just short of it: otherwise it
+// would reach the emitter's own geometry (quad lights are in the BVH) and report the light as occluded.
+Ray shadowRay(const ShadingPoint& sp, const LightSample& ls) {
+    Ray r;
+    r.o = offsetRayOrigin(sp.pGeom, sp.ng, ls.wi);
+    if (std::isinf(ls.distance)) {
+        r.d = ls.wi;
+        r.tMax = std::numeric_limits<float>::infinity();
+    } else {
+        Vec3 to = sp.pGeom + ls.wi * ls.distance - r.o;
+        float t = glm::length(to);
+        r.d = to / t;
+        r.tMax = t * (1.f - 1e-4f);
+    }
+    return r;
+}
+
 }  // namespace
 
 SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampler, ScratchArena& arena,
@@ -123,11 +141,35 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
         }
         if (closure.empty()) break;
 
-        // Next-event estimation: one sample of every light.
+        // Next-event estimation: one sample of every light. Polygonal lights whose whole closure has a
+        // closed-form polygon integral (BsdfLobe::integratePolygon, e.g. LTC lobes) are integrated
+        // analytically, times the visibility of one sampled point; BSDF sampling then skips them.
+        uint64_t analyticLights = 0;
         for (size_t li = 0; li < scene_.lights.size(); ++li) {
             const Light& light = *scene_.lights[li];
             LightSample ls;
             Vec2 u = sampler.get2D();
+            if (li < 64) {
+                Vec3 poly[4];
+                Color3 Lp;
+                int n = light.polygon(sp.pGeom, poly, Lp);
+                BsdfEval fa;
+                if (n > 0) {
+                    for (int k = 0; k < n; ++k) poly[k] = sp.frame.toLocal(poly[k] - sp.pGeom);
+                    if (closure.integratePolygon(wo, poly, n, fa)) {
+                        analyticLights |= uint64_t(1) << li;
+                        if (!light.sample(sp.pGeom, u, ls) || glm::dot(ls.wi, sp.ng) <= 0.f) continue;
+                        if (accel_.occluded(shadowRay(sp, ls))) continue;
+                        if (depth == 0) {
+                            out.diffuse += fa.diffuse * Lp;
+                            out.specular += fa.specular * Lp;
+                        } else {
+                            addIndirect(out, beta, fa.total() * Lp, clamp);
+                        }
+                        continue;
+                    }
+                }
+            }
             if (!light.sample(sp.pGeom, u, ls) || !(ls.pdf > 0.f) || maxComponent(ls.L) <= 0.f) continue;
             Vec3 wiL = sp.frame.toLocal(ls.wi);
             // Reject directions on the wrong side of the geometric surface (light leaks through normals).
@@ -137,11 +179,7 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
             sp.lightDistance = ls.delta ? ls.distance : std::numeric_limits<float>::infinity();
             BsdfEval f = closure.eval(wo, wiL);
             if (maxComponent(f.total()) <= 0.f) continue;
-            Ray shadow;
-            shadow.o = offsetRayOrigin(sp.pGeom, sp.ng, ls.wi);
-            shadow.d = ls.wi;
-            shadow.tMax = std::isinf(ls.distance) ? std::numeric_limits<float>::infinity() : ls.distance * (1.f - 1e-4f);
-            if (accel_.occluded(shadow)) continue;
+            if (accel_.occluded(shadowRay(sp, ls))) continue;
             float w = ls.delta ? 1.f : powerHeuristic(ls.pdf, closure.pdf(wo, wiL));
             Color3 scale = ls.L * (w / ls.pdf);
             if (depth == 0) {
@@ -195,6 +233,7 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
         }
         const ShapeInstance& nextShape = scene_.shapes[h.shape];
         if (nextShape.areaLight >= 0) {
+            if (nextShape.areaLight < 64 && (analyticLights >> nextShape.areaLight) & 1) break;  // counted analytically
             const Light& l = *scene_.lights[nextShape.areaLight];
             ShadingPoint lp = accel_.shadingPoint(next, h);
             Color3 Le = l.radiance(wiW, lp.frontFacing);

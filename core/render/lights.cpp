@@ -96,11 +96,23 @@ Color3 QuadLight::radiance(const Vec3& wi, bool) const {
     return (twoSided_ || cosL > 0.f) ? L_ : Color3(0.f);
 }
 
-int QuadLight::polygon(Vec3* v) const {
-    v[0] = corner_;
-    v[1] = corner_ + eu_;
-    v[2] = corner_ + eu_ + ev_;
-    v[3] = corner_ + ev_;
+int QuadLight::polygon(const Vec3& p, Vec3* v, Color3& radiance) const {
+    float side = glm::dot(p - corner_, n_);  // > 0: p is on the emitting (front) side
+    if (side == 0.f || (!twoSided_ && side < 0.f)) return 0;
+    // cross(eu, ev) = n points towards a front-side p, so (c, c+eu, c+eu+ev, c+ev) runs clockwise seen
+    // from p; reverse it for a counter-clockwise polygon (and keep it for a back-side p).
+    if (side > 0.f) {
+        v[0] = corner_;
+        v[1] = corner_ + ev_;
+        v[2] = corner_ + eu_ + ev_;
+        v[3] = corner_ + eu_;
+    } else {
+        v[0] = corner_;
+        v[1] = corner_ + eu_;
+        v[2] = corner_ + eu_ + ev_;
+        v[3] = corner_ + ev_;
+    }
+    radiance = L_;
     return 4;
 }
 

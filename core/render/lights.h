@@ -30,8 +30,9 @@ public:
     virtual Color3 radiance(const Vec3& wi, bool frontSide = true) const { return Color3(0.f); }
     virtual bool isDelta() const { return false; }
     virtual bool isEnvironment() const { return false; }
-    // Area lights: the emitting polygon (world space, counter-clockwise seen from the lit side).
-    virtual int polygon(Vec3* vertices) const { return 0; }
+    // Polygonal emitters: if p sees the emitting side, writes the polygon (world space, at most 4
+    // vertices, counter-clockwise seen from p), its constant radiance, and returns the vertex count.
+    virtual int polygon(const Vec3& p, Vec3* vertices, Color3& radiance) const { return 0; }
     std::string name;
 };
 
@@ -78,7 +79,7 @@ public:
     bool sample(const Vec3& p, const Vec2& u, LightSample& s) const override;
     float pdf(const Vec3& p, const Vec3& wi, float t) const override;
     Color3 radiance(const Vec3& wi, bool frontSide) const override;
-    int polygon(Vec3* vertices) const override;
+    int polygon(const Vec3& p, Vec3* vertices, Color3& radiance) const override;
     const Vec3& corner() const { return corner_; }
     const Vec3& edgeU() const { return eu_; }
     const Vec3& edgeV() const { return ev_; }
