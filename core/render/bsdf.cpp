@@ -5,9 +5,9 @@ namespace specula {
 
 void* ScratchArena::allocate(size_t size, size_t align) {
     size_t start = (offset_ + align - 1) & ~(align - 1);
-    if (start + size <= buffer_.size()) {
+    if (start + size <= size_) {
         offset_ = start + size;
-        return buffer_.data() + start;
+        return buffer_.get() + start;
     }
     // Rare: a shading point needed more than the arena; keep it alive until reset().
     overflow_.emplace_back(new std::byte[size + align]);

@@ -61,7 +61,8 @@ public:
 // Bump allocator for per-shading-point lobes; reset after each shading point (no heap in the hot path).
 class ScratchArena {
 public:
-    explicit ScratchArena(size_t bytes = 64 * 1024) : buffer_(bytes) {}
+    // The buffer is left uninitialised (new T[] without value-initialisation): a tile makes one arena.
+    explicit ScratchArena(size_t bytes = 64 * 1024) : buffer_(new std::byte[bytes]), size_(bytes) {}
     ScratchArena(const ScratchArena&) = delete;
     ScratchArena& operator=(const ScratchArena&) = delete;
     ~ScratchArena() { reset(); }
@@ -84,7 +85,8 @@ private:
         void (*fn)(void*);
         void* obj;
     };
-    std::vector<std::byte> buffer_;
+    std::unique_ptr<std::byte[]> buffer_;
+    size_t size_;
     size_t offset_ = 0;
     std::vector<Dtor> dtors_;
     std::vector<std::unique_ptr<std::byte[]>> overflow_;

@@ -2,6 +2,7 @@
 // over the library API (core/api/specula.h); exit codes are documented in docs/cli.md.
 #include "core/api/specula.h"
 #include "plugin/cli/graph_commands.h"
+#include "plugin/cli/normalmap_command.h"
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
@@ -227,6 +228,8 @@ int main(int argc, char** argv) {
 
     // ---- glsl / bsdf / plot: material authoring tools (plugin/cli/graph_commands.cpp) ------------
     addGraphCommands(app, exitCode);
+    // ---- normalmap: deterministic procedural normal maps (plugin/cli/normalmap_command.cpp) --------
+    addNormalmapCommand(app, exitCode);
 
     try {
         app.parse(argc, argv);

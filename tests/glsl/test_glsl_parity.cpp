@@ -362,7 +362,6 @@ ParityResult runParity(const NodeSpec& s, std::string* failure) {
             }
         }
         arena.reset();
-        if (getenv("PDEBUG") && j < 12) { printf("j=%d in:", j); for (int i = 0; i < L.floats; ++i) if (i>=kGeom+6) printf(" %.4g", d[i]); printf("\n cpu:"); for (int i = 0; i < L.outFloats; ++i) printf(" %.5g", cpu[i]); printf("\n gpu:"); for (int i = 0; i < L.outFloats; ++i) printf(" %.5g", gpu[size_t(j) * outW * 4 + i]); printf("\n"); }
         for (int i = 0; i < L.outFloats; ++i) {
             float gv = gpu[size_t(j) * outW * 4 + i], cv = cpu[i];
             float err = std::abs(gv - cv) / std::max(std::abs(cv), kRelFloor);

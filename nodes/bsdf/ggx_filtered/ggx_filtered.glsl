@@ -113,8 +113,9 @@ void spc_bsdf_ggx_filtered(SpeculaShadingInputs s, vec3 wo, vec3 wi, vec3 weight
     bsdf.emission = vec3(0.0);
     // A = diag(α²) + 2Σ, Σ made positive semi-definite; τ = det A (A.4).
     vec2 a = clamp(alpha, vec2(1e-4), vec2(0.999));
-    float sxx = max(covariance.x, 0.0), syy = max(covariance.z, 0.0), lim = sqrt(sxx * syy);
-    vec3 A = vec3(a.x * a.x + 2.0 * sxx, 2.0 * clamp(covariance.y, -lim, lim), a.y * a.y + 2.0 * syy);
+    // covariance = (var_x, var_y, cov_xy), as texture.lean outputs it
+    float sxx = max(covariance.x, 0.0), syy = max(covariance.y, 0.0), lim = sqrt(sxx * syy);
+    vec3 A = vec3(a.x * a.x + 2.0 * sxx, 2.0 * clamp(covariance.z, -lim, lim), a.y * a.y + 2.0 * syy);
     float tau = max(spc_ggxf_det(A), 1e-37);
     sigma2 = max(sigma2, 0.0);
     kappa = max(kappa, 0.0);

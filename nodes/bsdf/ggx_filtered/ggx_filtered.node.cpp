@@ -20,9 +20,10 @@ enum In { kWeight, kAlpha, kCovariance, kFilter, kKernel, kSigma2, kKappa, kDeri
 // [1e-4, 0.999] (the projected variants need α < 1, spec §3.3).
 Sym2 roughnessMatrix(Vec2 alpha, Vec3 cov) {
     double ax = std::clamp(double(alpha.x), 1e-4, 0.999), ay = std::clamp(double(alpha.y), 1e-4, 0.999);
-    double sxx = std::max(double(cov.x), 0.0), syy = std::max(double(cov.z), 0.0);
+    // Σ packed as (var_x, var_y, cov_xy), the layout of texture.lean's covariance output.
+    double sxx = std::max(double(cov.x), 0.0), syy = std::max(double(cov.y), 0.0);
     double lim = std::sqrt(sxx * syy);
-    double sxy = std::clamp(double(cov.y), -lim, lim);
+    double sxy = std::clamp(double(cov.z), -lim, lim);
     return {ax * ax + 2.0 * sxx, 2.0 * sxy, ay * ay + 2.0 * syy};
 }
 
@@ -77,7 +78,7 @@ void reg(NodeRegistry& r) {
     s.inputs = {
         std::move(PortSpec::c3("weight", Vec3(1.f), "tint / layer weight")).range(0.f, 1.f),
         std::move(PortSpec::v2("alpha", Vec2(0.05f), "unfiltered GGX α along tangent (x) and bitangent (y)")).range(0.02f, 0.9f),
-        std::move(PortSpec::v3("covariance", Vec3(0.f), "slope covariance Σ (xx, xy, yy) added as A + 2Σ (e.g. LEAN)")).range(0.f, 0.01f),
+        std::move(PortSpec::v3("covariance", Vec3(0.f), "slope covariance Σ as (var_x, var_y, cov_xy), added as A + 2Σ (texture.lean covariance)")).range(0.f, 0.01f),
         PortSpec::choice("filter", {"projected_approx", "none", "slope", "projected", "iso_max", "iso_sum", "iso_mean", "iso_rect"},
                          "NDF filter (spec §3): projected_approx = TK21 Eq. 9 (Listing 2 reading (a)); slope = K16 (reading (b))"),
         PortSpec::choice("kernel", {"axis_aligned", "full"}, "half-vector filters: bounding rectangle with κ clamp, or full Σ"),

@@ -1,0 +1,61 @@
+// bsdf.beckmann_lean: f·cos = weight · F(wo·h) D(h) G2(wo, wi) / (4 wo.z), the GLSL twin of BeckmannLeanLobe
+// (nodes/bsdf/beckmann_lean/beckmann_lean.h): D(h) = P22(slope(h)) / hz^4 with P22 the Gaussian of mean `slope` and
+// covariance Σ + (α²/2) I (Olano & Baker 2010), Smith Λ of the shifted Gaussian, G2 = 1/(1 + Λo + Λi).
+float spc_lean_normal_cdf(float d) {
+    float x = abs(d) * 0.70710678118654752;
+    float t = 1.0 / (1.0 + 0.3275911 * x);
+    float poly = t * (0.254829592 + t * (-0.284496736 + t * (1.421413741 + t * (-1.453152027 + t * 1.061405429))));
+    float halfc = 0.5 * poly * exp(-x * x);
+    return d >= 0.0 ? 1.0 - halfc : halfc;
+}
+float spc_lean_lambda(vec3 w, vec2 mean, float a, float b, float c) {
+    if (w.z <= 0.0) return 1e30;
+    float m = w.x * mean.x + w.y * mean.y;
+    float s2 = w.x * w.x * a + 2.0 * w.x * w.y * c + w.y * w.y * b;
+    float e = w.z - m;
+    float ap;
+    if (s2 > 0.0) {
+        float s = sqrt(s2);
+        float d = e / s;
+        ap = e * spc_lean_normal_cdf(d) + s * 0.39894228040143268 * exp(-0.5 * d * d);
+    } else {
+        ap = max(e, 0.0);
+    }
+    return max(ap / w.z - 1.0, 0.0);
+}
+void spc_bsdf_beckmann_lean(vec3 wo, vec3 wi, vec3 weight, float roughness, vec2 slope, vec3 covariance, int fresnel,
+                            vec3 f0, float ior, vec3 eta, vec3 k, vec3 normal, vec3 tangent, out SpeculaClosure bsdf) {
+    bsdf.f = vec3(0.0);
+    bsdf.emission = vec3(0.0);
+    // makeSlopeGaussian: PSD projection of the LEAN covariance, plus α²/2 per axis (α = roughness², >= 1e-3).
+    float xx = max(covariance.x, 0.0), yy = max(covariance.y, 0.0);
+    float lim = sqrt(xx * yy);
+    float xy = min(max(covariance.z, -lim), lim);
+    float al = max(roughness * roughness, 1e-3);
+    float v = 0.5 * al * al;
+    float a = xx + v, b = yy + v, c = xy;
+    float det = a * b - c * c;
+    vec3 T, B, N;
+    spc_frame(normal, tangent, T, B, N);
+    vec3 o = spc_to_local(wo, T, B, N);
+    vec3 i = spc_to_local(wi, T, B, N);
+    if (o.z <= 0.0 || i.z <= 0.0) return;
+    vec3 h = o + i;
+    float len = sqrt(dot(h, h));
+    if (len == 0.0) return;
+    h /= len;
+    if (h.z <= 0.0) return;
+    float z2 = h.z * h.z;
+    float dx = -h.x / h.z - slope.x, dy = -h.y / h.z - slope.y;
+    float q = (b * dx * dx - 2.0 * c * dx * dy + a * dy * dy) / det;
+    float d = exp(-0.5 * q) / (2.0 * SPC_PI * sqrt(det)) / (z2 * z2);
+    if (d == 0.0) return;
+    float g = 1.0 / (1.0 + spc_lean_lambda(o, slope, a, b, c) + spc_lean_lambda(i, slope, a, b, c));
+    float val = d * g / (4.0 * o.z);
+    float cw = dot(o, h);
+    vec3 F = vec3(1.0);
+    if (fresnel == 0) F = spc_fresnel_schlick(cw, f0);
+    else if (fresnel == 1) F = vec3(spc_fresnel_dielectric(cw, ior));
+    else if (fresnel == 2) F = vec3(spc_fresnel_conductor(cw, eta.x, k.x), spc_fresnel_conductor(cw, eta.y, k.y), spc_fresnel_conductor(cw, eta.z, k.z));
+    bsdf.f = weight * (F * val);
+}

@@ -1,0 +1,147 @@
+// Beckmann microfacet reflection with a LEAN slope distribution (Olano & Baker 2010): a non-centred anisotropic
+// Gaussian of slopes with mean μ and covariance Σ + (α²/2) I; the lobe bsdf.beckmann_lean builds (CPU side).
+#pragma once
+
+#include "core/render/bsdf.h"
+#include "core/render/lobes/fresnel.h"
+
+#include <cmath>
+
+namespace specula::lean {
+
+// Slope convention (glint-brdf.md §1): slope(w) = (-wx/wz, -wy/wz); D(h) = P22(slope(h)) / hz^4.
+
+// Standard normal CDF Φ(d) = erfc(-d/√2)/2 with Abramowitz & Stegun 7.1.26 for erfc (|error of erf| ≤ 1.5e-7),
+// written as poly(t)·exp(-x²) so the tail keeps its relative accuracy. The GLSL twin uses the same formula.
+inline float normalCdf(float d) {
+    float x = std::abs(d) * 0.70710678118654752f;
+    float t = 1.f / (1.f + 0.3275911f * x);
+    float poly = t * (0.254829592f + t * (-0.284496736f + t * (1.421413741f + t * (-1.453152027f + t * 1.061405429f))));
+    float half = 0.5f * poly * std::exp(-x * x);  // erfc(x)/2
+    return d >= 0.f ? 1.f - half : half;
+}
+
+// Total slope covariance of the lobe: the LEAN covariance (projected to PSD) plus the material's Beckmann
+// roughness α as an isotropic variance α²/2 per axis (Olano & Baker 2010: Σ_total = Σ + (1/s) I with the
+// Beckmann variance 1/s = α²/2; glint-brdf.md §1: α = √2 σ). α is clamped to >= kMinAlpha so Σ is invertible.
+struct SlopeGaussian {
+    Vec2 mean{0.f};
+    float a = 0, b = 0, c = 0;  // Σ = [[a, c], [c, b]]
+    float det = 0;
+};
+constexpr float kMinAlpha = 1e-3f;
+
+inline SlopeGaussian makeSlopeGaussian(Vec2 mean, Vec3 cov, float alpha) {
+    SlopeGaussian g;
+    g.mean = mean;
+    float xx = std::max(cov.x, 0.f), yy = std::max(cov.y, 0.f);
+    float lim = std::sqrt(xx * yy);
+    float xy = std::min(std::max(cov.z, -lim), lim);
+    float al = std::max(alpha, kMinAlpha);
+    float v = 0.5f * al * al;
+    g.a = xx + v;
+    g.b = yy + v;
+    g.c = xy;
+    g.det = g.a * g.b - g.c * g.c;
+    return g;
+}
+
+// P22(s) = exp(-½ (s-μ)ᵀ Σ⁻¹ (s-μ)) / (2π sqrt(det Σ))  (Chermain et al. 2021 Eq. 16 / glint-brdf.md S7 P_B, shifted).
+inline float slopePdf(const SlopeGaussian& g, Vec2 s) {
+    float dx = s.x - g.mean.x, dy = s.y - g.mean.y;
+    float q = (g.b * dx * dx - 2.f * g.c * dx * dy + g.a * dy * dy) / g.det;
+    return std::exp(-0.5f * q) / (2.f * kPi * std::sqrt(g.det));
+}
+
+// D(h) = P22(slope(h)) / hz^4; ∫ D(h) hz dω_h = ∫ P22 ds = 1 exactly.
+inline float ndf(const SlopeGaussian& g, const Vec3& h) {
+    if (h.z <= 0.f) return 0.f;
+    float z2 = h.z * h.z;
+    return slopePdf(g, Vec2(-h.x / h.z, -h.y / h.z)) / (z2 * z2);
+}
+
+// Smith Λ for a Gaussian slope distribution with non-zero mean. With r = wx x~ + wy y~ ~ N(m, s²)
+// (m = wxy·μ, s² = wxyᵀ Σ wxy), the projected area of the facets visible from w is
+//   A⁺(w) = ∫ max(0, w·m̂) D(m̂) dm̂ = E[(wz − r)⁺] = (wz − m) Φ(d) + s φ(d),  d = (wz − m)/s
+// (Heitz 2014, §5.3 / Eq. 72 in slope space; the same construction as LEADR mapping, Dupuy et al. 2013), and
+// Λ = A⁺/wz − 1, clamped to >= 0. For μ = 0 this is exactly Beckmann's Λ = (erf(a) − 1)/2 + e^(−a²)/(2a√π),
+// a = cot θ / α (Walter et al. 2007, Eq. 27 with Heitz's Λ form).
+inline float lambda(const SlopeGaussian& g, const Vec3& w) {
+    if (w.z <= 0.f) return 1e30f;
+    float m = w.x * g.mean.x + w.y * g.mean.y;
+    float s2 = w.x * w.x * g.a + 2.f * w.x * w.y * g.c + w.y * w.y * g.b;
+    float e = w.z - m;
+    float ap;
+    if (s2 > 0.f) {
+        float s = std::sqrt(s2);
+        float d = e / s;
+        ap = e * normalCdf(d) + s * 0.39894228040143268f * std::exp(-0.5f * d * d);
+    } else {
+        ap = std::max(e, 0.f);
+    }
+    return std::max(ap / w.z - 1.f, 0.f);
+}
+
+// f·cos = F(wo·h) D(h) G2(wo, wi) / (4 wo.z), G2 height-correlated = 1/(1 + Λ(wo) + Λ(wi)) (Heitz 2014, Eq. 99).
+inline float evalNoFresnel(const SlopeGaussian& g, const Vec3& wo, const Vec3& wi, Vec3* hOut = nullptr) {
+    if (wo.z <= 0.f || wi.z <= 0.f) return 0.f;
+    Vec3 h = wo + wi;
+    float len = std::sqrt(glm::dot(h, h));
+    if (len == 0.f) return 0.f;
+    h /= len;
+    if (hOut) *hOut = h;
+    float d = ndf(g, h);
+    if (d == 0.f) return 0.f;
+    float g2 = 1.f / (1.f + lambda(g, wo) + lambda(g, wi));
+    return d * g2 / (4.f * wo.z);
+}
+
+}  // namespace specula::lean
+
+namespace specula {
+
+class BeckmannLeanLobe final : public BsdfLobe {
+public:
+    BeckmannLeanLobe(const lean::SlopeGaussian& g, const Fresnel& fresnel) : g_(g), fresnel_(fresnel) {}
+    LobeKind kind() const override { return LobeKind::Specular; }
+
+    Color3 eval(const Vec3& wo, const Vec3& wi) const override {
+        Vec3 h;
+        float v = lean::evalNoFresnel(g_, wo, wi, &h);
+        if (v == 0.f) return Color3(0.f);
+        return fresnel_.eval(glm::dot(wo, h)) * v;
+    }
+    // Slope-space sampling of the Gaussian: pdf_h(h) = D(h) hz, pdf_wi = D(h) hz / (4 wo·h).
+    float pdf(const Vec3& wo, const Vec3& wi) const override {
+        if (wo.z <= 0.f || wi.z <= 0.f) return 0.f;
+        Vec3 h = wo + wi;
+        float len = std::sqrt(glm::dot(h, h));
+        if (len == 0.f) return 0.f;
+        h /= len;
+        float woh = glm::dot(wo, h);
+        if (woh <= 0.f) return 0.f;
+        return lean::ndf(g_, h) * h.z / (4.f * woh);
+    }
+    bool sample(const Vec3& wo, const Vec2& u, Vec3& wi) const override {
+        if (wo.z <= 0.f) return false;
+        // Box-Muller, then s = μ + L z with the Cholesky factor L of Σ.
+        float r = std::sqrt(-2.f * std::log(std::max(1.f - u.x, 1e-30f)));
+        float phi = 2.f * kPi * u.y;
+        float z1 = r * std::cos(phi), z2 = r * std::sin(phi);
+        float l11 = std::sqrt(g_.a), l21 = g_.c / l11, l22 = std::sqrt(std::max(g_.b - l21 * l21, 0.f));
+        float sx = g_.mean.x + l11 * z1, sy = g_.mean.y + l21 * z1 + l22 * z2;
+        Vec3 m = glm::normalize(Vec3(-sx, -sy, 1.f));
+        float wom = glm::dot(wo, m);
+        if (wom <= 0.f) return false;
+        wi = 2.f * wom * m - wo;
+        return wi.z > 0.f;
+    }
+    Color3 albedo(const Vec3& wo) const override { return fresnel_.eval(std::max(wo.z, 0.f)); }
+    const lean::SlopeGaussian& gaussian() const { return g_; }
+
+private:
+    lean::SlopeGaussian g_;
+    Fresnel fresnel_;
+};
+
+}  // namespace specula
