@@ -3,6 +3,7 @@
 #include "core/api/specula.h"
 #include "plugin/cli/graph_commands.h"
 #include "plugin/cli/normalmap_command.h"
+#include "plugin/cli/nodes_command.h"
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
@@ -230,6 +231,7 @@ int main(int argc, char** argv) {
     addGraphCommands(app, exitCode);
     // ---- normalmap: deterministic procedural normal maps (plugin/cli/normalmap_command.cpp) --------
     addNormalmapCommand(app, exitCode);
+    addNodesCommand(app, exitCode);
 
     try {
         app.parse(argc, argv);

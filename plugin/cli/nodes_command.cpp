@@ -1,0 +1,546 @@
+// `specula nodes`: the node registry as text, JSON or the Markdown reference page (docs/nodes.md).
+// Everything per node comes from its NodeSpec; the only fixed text here is the page's prose (conventions, the
+// parity measurements, per-category notes and a few implementation notes that are not NodeSpec fields).
+// Output is deterministic (sorted ids, locale-independent number formatting), so the committed page can be
+// compared byte for byte with a fresh run (tests/unit/test_nodes_doc.cpp).
+#include "plugin/cli/nodes_command.h"
+
+#include "core/graph/node_spec.h"
+#include "core/io/image_io.h"
+#include "core/util/error.h"
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <set>
+#include <string>
+#include <vector>
+
+namespace specula {
+namespace {
+
+using namespace specula::graph;
+using ojson = nlohmann::ordered_json;
+
+const char* const kRegenerate = "build/bin/specula nodes --markdown -o docs/nodes.md";
+
+// ---- formatting helpers ---------------------------------------------------------------------------
+
+// Shortest decimal text that reads back as the same float ("0.04", not "0.0399999991").
+std::string num(float v) {
+    if (std::isnan(v)) return "nan";
+    if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
+    char buf[40];
+    for (int prec = 1; prec <= 9; ++prec) {
+        std::snprintf(buf, sizeof buf, "%.*g", prec, double(v));
+        if (std::strtof(buf, nullptr) == v) {
+            // %g switches to an exponent once the exponent reaches the precision ("1e+01"): widen it for
+            // magnitudes below 1e7 so integers read naturally ("10").
+            int e = int(std::floor(std::log10(std::fabs(double(v)))));
+            if (v != 0.f && e >= prec && e < 7) std::snprintf(buf, sizeof buf, "%.*g", e + 1, double(v));
+            break;
+        }
+    }
+    return buf;
+}
+
+// A tolerance as written in prose: "1e-4", "2e-4", "0.12" (shortest round-trip digits).
+std::string tolText(float v) {
+    if (!(std::fabs(v) < 0.01f) || v == 0.f) return num(v);
+    char buf[40];
+    for (int prec = 0; prec <= 8; ++prec) {
+        std::snprintf(buf, sizeof buf, "%.*e", prec, double(v));
+        if (std::strtof(buf, nullptr) == v) break;
+    }
+    std::string t = buf;  // "2e-04"
+    size_t e = t.find('e');
+    std::string mant = t.substr(0, e), ex = t.substr(e + 1);
+    bool neg = ex[0] == '-';
+    ex = ex.substr(1);
+    while (ex.size() > 1 && ex[0] == '0') ex.erase(0, 1);
+    return mant + "e" + (neg ? "-" : "") + ex;
+}
+
+// The same value as a JSON number (parsed from the shortest text, so the JSON shows it too).
+ojson jsonNum(float v) {
+    if (!std::isfinite(v)) return nullptr;
+    return std::strtod(num(v).c_str(), nullptr);
+}
+
+std::string vecText(const PortSpec& p) {
+    int w = typeWidth(p.type);
+    if (w == 1) return num(p.def[0]);
+    std::string s = "(";
+    for (int k = 0; k < w; ++k) s += (k ? ", " : "") + num(p.def[size_t(k)]);
+    return s + ")";
+}
+
+bool hasMin(const PortSpec& p) { return std::isfinite(p.minValue); }
+bool hasMax(const PortSpec& p) { return std::isfinite(p.maxValue); }
+
+// Default of an input as plain text; "" when it has none (required, or read from a binding).
+std::string defaultText(const PortSpec& p) {
+    if (p.required) return "";
+    if (p.binding != GeomBinding::None) return "";
+    if (p.type == TypeDesc::String) return p.defString;
+    if (!isNumeric(p.type)) return "";
+    return vecText(p);
+}
+
+std::string rangeText(const PortSpec& p) {
+    if (hasMin(p) && hasMax(p)) return "[" + num(p.minValue) + ", " + num(p.maxValue) + "]";
+    if (hasMin(p)) return ">= " + num(p.minValue);
+    if (hasMax(p)) return "<= " + num(p.maxValue);
+    return "";
+}
+
+std::string join(const std::vector<std::string>& v, const std::string& sep) {
+    std::string s;
+    for (size_t i = 0; i < v.size(); ++i) s += (i ? sep : "") + v[i];
+    return s;
+}
+
+std::string yesNo(bool b) { return b ? "yes" : "no"; }
+
+std::string flagsText(const NodeSpec& s) {
+    return "pure: " + yesNo(s.has(kPure)) + ", needs derivatives: " + yesNo(s.has(kNeedsDerivatives)) +
+           ", emissive: " + yesNo(s.has(kEmissive));
+}
+
+// One Markdown table row from already escaped cells ("| a | b |", empty cells as "| |").
+std::string row(const std::vector<std::string>& cells) {
+    std::string r = "|";
+    for (auto& c : cells) r += c.empty() ? " |" : " " + c + " |";
+    return r + "\n";
+}
+
+// Markdown table cell: pipes escaped, no line breaks.
+std::string cell(const std::string& text) {
+    std::string s;
+    for (char c : text) {
+        if (c == '|')
+            s += "\\|";
+        else if (c == '\n')
+            s += ' ';
+        else
+            s += c;
+    }
+    return s;
+}
+
+std::string code(const std::string& text) { return text.empty() ? "" : "`" + text + "`"; }
+
+// GitHub heading anchor of "### `<id>`": lower case, punctuation other than '-' and '_' dropped.
+std::string anchor(const std::string& heading) {
+    std::string a;
+    for (char c : heading) {
+        unsigned char u = static_cast<unsigned char>(c);
+        if (std::isalnum(u) || c == '-' || c == '_')
+            a += char(std::tolower(u));
+        else if (c == ' ')
+            a += '-';
+    }
+    return a;
+}
+
+// Left-aligned text columns separated by two spaces; the last column is not padded.
+std::string textTable(const std::vector<std::vector<std::string>>& rows, const std::string& indent) {
+    std::vector<size_t> width;
+    for (auto& r : rows)
+        for (size_t c = 0; c + 1 < r.size(); ++c) {
+            if (width.size() <= c) width.resize(c + 1, 0);
+            width[c] = std::max(width[c], r[c].size());
+        }
+    std::string out;
+    for (auto& r : rows) {
+        std::string line = indent;
+        for (size_t c = 0; c < r.size(); ++c) {
+            line += r[c];
+            if (c + 1 < r.size()) line += std::string(width[c] - r[c].size() + 2, ' ');
+        }
+        while (!line.empty() && line.back() == ' ') line.pop_back();
+        out += line + "\n";
+    }
+    return out;
+}
+
+// ---- fixed prose of the reference page ------------------------------------------------------------
+
+// Category order of the page (the families of node_spec.h); categories not listed follow alphabetically.
+const std::vector<std::string>& categoryOrder() {
+    static const std::vector<std::string> order = {"constant", "geometry", "texture", "math",
+                                                   "convert",  "fresnel",  "bsdf",    "closure"};
+    return order;
+}
+
+// Notes shown under a category heading: what the NodeSpecs of the family share.
+const std::map<std::string, std::string>& categoryNotes() {
+    static const std::map<std::string, std::string> notes = {
+        {"constant", "A typed literal as a node. Pure: always folded on the CPU; in GLSL the literal is a uniform-block "
+                     "member.\n"},
+        {"geometry",
+         "GLSL: read `SpeculaShadingInputs s`. CPU sources (`ShadingPoint sp`):\n\n"
+         "| id | CPU source |\n"
+         "|---|---|\n"
+         "| `geometry.uv` | `sp.uv`, `sp.duvdx`, `sp.duvdy` |\n"
+         "| `geometry.position` | `sp.p`, `sp.dpdx`, `sp.dpdy` |\n"
+         "| `geometry.normal` | `sp.n`, `sp.dndx`, `sp.dndy` |\n"
+         "| `geometry.tangent` | `sp.tangent.xyz`, `.w` |\n"
+         "| `geometry.geometric_normal` | `sp.ng` |\n\n"
+         "Derivatives: CPU from ray differentials (zero when `sp.hasDifferentials` is false); GLSL from the struct, "
+         "which `specula_shading_inputs()` fills with `dFdx/dFdy` (tested: exact for linear attributes).\n"},
+        {"texture", "Plain string inputs (`file`, `colorspace`) are literals resolved on the host (a `file` is relative "
+                    "to the scene file); enum choices reach GLSL as their index. For a node with a `sampler2D` in its "
+                    "prototype the emitter declares `layout(binding = i) uniform sampler2D spc_tex_<node>`.\n"},
+        {"math", "Component-wise; typed variants `math.<op>.<type>` with `<type>` in `float`, `vec2`, `color3`, "
+                 "`vector3` (`dot`, `normalize`, `length`: `vec2`, `vector3`). Writing `math.add` alone is an error "
+                 "suggesting a typed variant.\n"},
+        {"convert", "Connections never convert implicitly ([graph-format.md](graph-format.md#types-and-conversions)): "
+                    "these nodes are the explicit conversions. Input `in`, output `out`; broadcasts copy the float into "
+                    "every component, reinterpretations keep the values (no renormalisation).\n"},
+        {"fresnel", "Pattern nodes; `cos_theta` defaults to the binding `NdotV` = dot(N, wo). CPU code is "
+                    "`core/render/lobes/fresnel.h`; GLSL twins are in the prelude (same operation order).\n"},
+        {"bsdf", "Closure-producing nodes. The first BSDF node of a material fixes its shading frame (from its "
+                 "`normal`/`tangent` inputs); later BSDFs with another frame are rotated into it "
+                 "([graph-format.md](graph-format.md#compilation-cpu)). The material output is the graph's `\"output\"` "
+                 "reference (a closure).\n"},
+        {"closure", "Closure combinators; their closure inputs are required (a closure has no default).\n"},
+    };
+    return notes;
+}
+
+// Implementation notes for single nodes: references and formulas that are not NodeSpec fields.
+const std::map<std::string, std::string>& nodeNotes() {
+    static const std::map<std::string, std::string> notes = {
+        {"texture.image",
+         "`colorspace`: any OCIO name/alias or `raw`; `color` is converted to the working space. CPU: "
+         "`TextureStore::sample` (OIIO TextureSystem, bilinear + anisotropic MIP filtering with the footprint, v = 0 "
+         "bottom). GLSL: `textureGrad(sampler, uv, duvdx, duvdy)`; the emitter declares the sampler."},
+        {"texture.normal_map",
+         "`normal` = normalize(x·T + y·sign·(N×T) + z·N) with (x, y, z) = 2·color − 1, x and y scaled by `strength`, "
+         "T Gram-Schmidt-orthogonalised to N."},
+        {"math.remap.float", "out_min + (x − in_min)/(in_max − in_min)·(out_max − out_min); out_min if in_max = in_min; "
+                             "no clamping."},
+        {"math.remap.vec2", "As `math.remap.float`, per component."},
+        {"math.remap.color3", "As `math.remap.float`, per component."},
+        {"math.remap.vector3", "As `math.remap.float`, per component."},
+        {"bsdf.diffuse", "CPU: `LambertLobe`."},
+        {"bsdf.ggx",
+         "α = roughness² (Burley 2012); aspect a = √(1 − 0.9·anisotropy), αx = α/a, αy = α·a (Burley 2012, addendum "
+         "B.2), αx and αy clamped at 1e-4 like `GgxLobe`; `fresnel` is evaluated per microfacet at wo·h. CPU: "
+         "`GgxLobe` (anisotropic GGX D, Walter et al. 2007 Eq. 33; height-correlated Smith G2, Heitz 2014 Eq. 99; VNDF "
+         "sampling, Heitz 2018), unfiltered. GLSL: the same eval, f·cos = weight·F·D·G2/(4 wo.z)."},
+        {"bsdf.emission", "No lobes: emission only."},
+        {"closure.add", "Lobes are concatenated, at most `Closure::kMaxLobes` = 8."},
+        {"closure.mix", "Lobe weights and emission are scaled."},
+    };
+    return notes;
+}
+
+std::string pageHeader(size_t nodeCount, size_t categoryCount) {
+    std::string h;
+    h += "# Node reference\n\n";
+    h += "<!-- Generated by `specula nodes --markdown` (plugin/cli/nodes_command.cpp) from the node registry: do not "
+         "edit.\n     Regenerate: ";
+    h += kRegenerate;
+    h += " -->\n\n";
+    h += "This page is generated from the node registry: every node's `NodeSpec` (id, version, ports, defaults, "
+         "ranges,\nbindings, flags, parity tolerance) is declared once, in C++, in its node file. Regenerate it with\n`";
+    h += kRegenerate;
+    h += "`; `tests/unit/test_nodes_doc.cpp` fails when it is out of date.\n"
+         "`specula nodes` lists the registry, `specula nodes ID` prints one node and `specula nodes --json` the\n"
+         "machine-readable form of every field.\n\n";
+    h += "A material graph names a node by its id in `\"type\"` and sets inputs by port name, to a literal or to a "
+         "reference\n`\"@node.output\"`; an unlisted input takes its default, or its geometric binding. See\n"
+         "[graph-format.md](graph-format.md) for the graph syntax, the type rules, bindings and errors.\n\n";
+    h += std::to_string(nodeCount) + " nodes in " + std::to_string(categoryCount) + " categories.\n\n";
+
+    h += "## Conventions\n\n";
+    h += "Each node is a folder `nodes/<family>/<node>/` with `<node>.node.cpp` (the `NodeSpec`: ports declared once, "
+         "CPU\nentry, registration via `SPECULA_REGISTER_NODES`) and `<node>.glsl` (embedded into the binary at build "
+         "time).\nTyped families register several specs from one folder (`math.add.float`, `math.add.vec2`, ...), "
+         "sharing one `.glsl`\nwith overloads. GLSL prototypes are derived from the ports:\n"
+         "`void fn([SpeculaShadingInputs s,] [vec3 wo, vec3 wi,] [sampler2D tex,] inputs..., out outputs...)`\n"
+         "(enum ports are passed as `int` index, plain string ports stay on the host; see "
+         "`NodeSpec::glslPrototype`).\n\n";
+    h += "Input tables:\n\n"
+         "- **default**: the value of an unlisted input (a number fills every component). Empty when the input is "
+         "required\n  (closures, file names, colorspaces) or reads a binding.\n"
+         "- **range**: the documented soft range (not enforced; the parity suite samples inside it), or for an enum "
+         "port\n  its values (GLSL gets the index; the first is the default).\n"
+         "- **binding**: the default geometric binding of an unconnected input (`uv0`, `duv0dx`, `duv0dy`, `P`, `N`, "
+         "`Ng`,\n  `T`, `Tsign`, `NdotV`; see [graph-format.md](graph-format.md#rules)), read by both backends.\n\n"
+         "Flags: **pure** nodes are constant-folded when all their inputs are constant; **needs derivatives** nodes "
+         "read\nscreen-space differentials (CPU ray differentials, GLSL `dFdx/dFdy`); **emissive** nodes can produce "
+         "emission.\n\n";
+
+    h += "## CPU/GLSL parity\n\n";
+    h += "ctest label `glsl`, `tests/glsl/test_glsl_parity.cpp`: per node, 1024 random input sets (inside each port's\n"
+         "documented range; normals/tangents random unit vectors; directions 85 % above the BSDF's normal) run through "
+         "the\nnode's GLSL on Mesa llvmpipe (headless EGL, RGBA32F) and through the CPU program; error metric\n"
+         "`|gpu − cpu| / max(|cpu|, 1e-3)`. The tolerance is `NodeSpec::parityTolerance` (default 1e-4; a looser one "
+         "carries\na `parityNote`), listed under each node below, so the test and this page use one number.\n\n";
+    h += "Measured maximum relative errors (Mesa 22.3.6 / LLVM 15, llvmpipe; measurements, not registry data; nodes "
+         "added\nlater quote theirs in their parity note):\n\n"
+         "| node(s) | measured max rel. error | note |\n"
+         "|---|---|---|\n"
+         "| constant.\\*, convert.\\*, geometry.\\*, math.add/sub/mul/div/mix/clamp/remap/dot/normalize/length.\\* | 0 "
+         "(bit-exact) | |\n"
+         "| math.pow.\\* | 6.8e-7 | llvmpipe `pow` = exp2·log2 |\n"
+         "| fresnel.schlick / dielectric / conductor | 1.7e-7 / 0 / 8.1e-7 | |\n"
+         "| bsdf.diffuse | 4.2e-6 | |\n"
+         "| bsdf.ggx | 5.1e-6 | roughness sampled in [0.1, 1] (α ≥ 0.01); below, D's conditioning (∝ 1/α) dominates "
+         "float error in both backends |\n"
+         "| bsdf.emission | 0 | |\n"
+         "| closure.add / closure.mix | 1.9e-6 / 3.0e-6 | closure inputs are bsdf.diffuse on both sides |\n"
+         "| texture.normal_map | 9.0e-5 | frame build + renormalisation (sqrt/divide, FMA contraction in llvmpipe) |\n"
+         "| texture.image | 8.4e-5 | zero footprint (bilinear, level 0), wrap repeat, uv ∈ [−1, 2]; OIIO vs llvmpipe "
+         "bilinear weight rounding. Non-zero footprints are *not* compared: OIIO's anisotropic filter and GL trilinear "
+         "differ by design |\n"
+         "| emitted modules (tests/glsl/data/materials.json: gold_mirror, brushed_steel, plastic, bumpy_copper) | ≤ "
+         "1.4e-5 | whole module: uniform block, bindings, specula_eval/emission; tolerance 2e-4 |\n\n";
+    return h;
+}
+
+// ---- registry views ------------------------------------------------------------------------------
+
+std::vector<std::string> orderedCategories(const std::vector<const NodeSpec*>& all) {
+    std::set<std::string> present;
+    for (auto* s : all) present.insert(s->category);
+    std::vector<std::string> out;
+    for (auto& c : categoryOrder())
+        if (present.erase(c)) out.push_back(c);
+    out.insert(out.end(), present.begin(), present.end());  // std::set: sorted
+    return out;
+}
+
+std::string nodeMarkdown(const NodeSpec& s) {
+    std::string m = "### `" + s.id + "`\n\n";
+    m += s.doc + "\n\n";
+    auto note = nodeNotes().find(s.id);
+    if (note != nodeNotes().end()) m += "Notes: " + note->second + "\n\n";
+    m += "- version " + std::to_string(s.version) + ", category `" + s.category + "`\n";
+    m += "- flags: " + flagsText(s) + "\n";
+    m += "- GLSL: `" + s.glslPrototype() + "`";
+    if (!s.glslFile.empty()) m += " in `nodes/" + s.glslFile + "`";
+    m += "\n";
+    m += "- parity tolerance: " + tolText(s.parityTolerance);
+    if (!s.parityNote.empty()) m += " — " + s.parityNote;
+    m += "\n\n";
+    if (!s.inputs.empty()) {
+        m += "| input | type | default | range | binding | doc |\n|---|---|---|---|---|---|\n";
+        for (auto& p : s.inputs) {
+            std::string def = p.required ? "*required*" : cell(code(defaultText(p)));
+            std::string range;
+            if (!p.enumValues.empty()) {
+                std::vector<std::string> vals;
+                for (auto& v : p.enumValues) vals.push_back(code(v));
+                range = cell(join(vals, " | "));
+            } else {
+                range = cell(rangeText(p));
+            }
+            m += row({code(cell(p.name)), typeName(p.type), def, range, cell(code(bindingName(p.binding))), cell(p.doc)});
+        }
+        m += "\n";
+    }
+    if (!s.outputs.empty()) {
+        m += "| output | type | doc |\n|---|---|---|\n";
+        for (auto& p : s.outputs) m += row({code(cell(p.name)), typeName(p.type), cell(p.doc)});
+        m += "\n";
+    }
+    return m;
+}
+
+std::string registryMarkdown(const std::vector<const NodeSpec*>& all) {
+    std::vector<std::string> cats = orderedCategories(all);
+    std::string m = pageHeader(all.size(), cats.size());
+    m += "## Contents\n\n";
+    for (auto& c : cats) {
+        std::vector<std::string> links;
+        for (auto* s : all)
+            if (s->category == c) links.push_back("[`" + s->id + "`](#" + anchor(s->id) + ")");
+        m += "- [" + c + "](#" + anchor(c) + "): " + join(links, ", ") + "\n";
+    }
+    m += "\n";
+    for (auto& c : cats) {
+        m += "## " + c + "\n\n";
+        auto note = categoryNotes().find(c);
+        if (note != categoryNotes().end()) m += note->second + "\n";
+        for (auto* s : all)
+            if (s->category == c) m += nodeMarkdown(*s);
+    }
+    while (m.size() >= 2 && m[m.size() - 1] == '\n' && m[m.size() - 2] == '\n') m.pop_back();
+    return m;
+}
+
+ojson portJson(const PortSpec& p, bool input) {
+    ojson j;
+    j["name"] = p.name;
+    j["type"] = typeName(p.type);
+    if (input) {
+        if (p.type == TypeDesc::String)
+            j["default"] = p.required ? ojson(nullptr) : ojson(p.defString);
+        else if (!isNumeric(p.type))
+            j["default"] = nullptr;
+        else if (typeWidth(p.type) == 1)
+            j["default"] = jsonNum(p.def[0]);
+        else {
+            ojson a = ojson::array();
+            for (int k = 0; k < typeWidth(p.type); ++k) a.push_back(jsonNum(p.def[size_t(k)]));
+            j["default"] = a;
+        }
+        j["required"] = p.required;
+        if (!p.enumValues.empty()) j["enum"] = p.enumValues;
+        j["min"] = jsonNum(p.minValue);
+        j["max"] = jsonNum(p.maxValue);
+        j["binding"] = p.binding == GeomBinding::None ? ojson(nullptr) : ojson(bindingName(p.binding));
+    }
+    j["doc"] = p.doc;
+    return j;
+}
+
+ojson nodeJson(const NodeSpec& s) {
+    ojson j;
+    j["id"] = s.id;
+    j["version"] = s.version;
+    j["category"] = s.category;
+    j["doc"] = s.doc;
+    ojson in = ojson::array(), out = ojson::array();
+    for (auto& p : s.inputs) in.push_back(portJson(p, true));
+    for (auto& p : s.outputs) out.push_back(portJson(p, false));
+    j["inputs"] = in;
+    j["outputs"] = out;
+    j["flags"] = {{"pure", s.has(kPure)},
+                  {"needs_derivatives", s.has(kNeedsDerivatives)},
+                  {"emissive", s.has(kEmissive)},
+                  {"glsl_shading", s.has(kGlslShading)},
+                  {"glsl_directions", s.has(kGlslDirections)},
+                  {"glsl_texture", s.has(kGlslTexture)}};
+    j["glsl"] = {{"function", s.glslFunction},
+                 {"file", s.glslFile.empty() ? std::string() : "nodes/" + s.glslFile},
+                 {"prototype", s.glslPrototype()}};
+    j["parity"] = {{"tolerance", jsonNum(s.parityTolerance)}, {"note", s.parityNote}};
+    return j;
+}
+
+std::string listingText(const std::vector<const NodeSpec*>& all) {
+    std::vector<std::vector<std::string>> rows;
+    for (auto* s : all) rows.push_back({s->id, s->category, s->doc});
+    return textTable(rows, "");
+}
+
+std::string nodeText(const NodeSpec& s) {
+    std::string t = s.id + "  (version " + std::to_string(s.version) + ", category " + s.category + ")\n";
+    t += "  " + s.doc + "\n";
+    auto note = nodeNotes().find(s.id);
+    if (note != nodeNotes().end()) t += "  Notes: " + note->second + "\n";
+    t += "inputs:\n";
+    std::vector<std::vector<std::string>> rows;
+    for (auto& p : s.inputs) {
+        std::string def;
+        if (p.required)
+            def = "required";
+        else if (p.binding != GeomBinding::None)
+            def = std::string("binding ") + bindingName(p.binding);
+        else
+            def = "default " + (p.type == TypeDesc::String ? p.defString : vecText(p));
+        std::string range = !p.enumValues.empty() ? "values " + join(p.enumValues, "|")
+                                                  : (rangeText(p).empty() ? "" : "range " + rangeText(p));
+        rows.push_back({p.name, typeName(p.type), def, range, p.doc});
+    }
+    t += rows.empty() ? "  (none)\n" : textTable(rows, "  ");
+    t += "outputs:\n";
+    rows.clear();
+    for (auto& p : s.outputs) rows.push_back({p.name, typeName(p.type), p.doc});
+    t += rows.empty() ? "  (none)\n" : textTable(rows, "  ");
+    t += "flags: " + flagsText(s) + "\n";
+    t += "glsl: " + s.glslPrototype() + (s.glslFile.empty() ? "" : "  (nodes/" + s.glslFile + ")") + "\n";
+    t += "parity tolerance: " + tolText(s.parityTolerance) + (s.parityNote.empty() ? "" : " — " + s.parityNote) + "\n";
+    return t;
+}
+
+// Suggestion for an unknown id: the nearest registered id, or the first typed variant of a family name.
+std::string suggestId(const std::string& id, const std::vector<std::string>& ids) {
+    std::string best = nearestName(id, ids);
+    if (!best.empty()) return best;
+    for (auto& c : ids)
+        if (c.rfind(id + ".", 0) == 0) return c;
+    return "";
+}
+
+}  // namespace
+
+void addNodesCommand(CLI::App& app, int& exitCode) {
+    struct Opts {
+        std::string id, out;
+        bool json = false, markdown = false;
+    };
+    auto o = std::make_shared<Opts>();
+    auto* cmd = app.add_subcommand("nodes", "List the registered shading nodes, print one node's spec, or write the "
+                                            "registry as JSON or as the Markdown node reference (docs/nodes.md)");
+    cmd->add_option("id", o->id, "Node id (e.g. bsdf.ggx): print only this node");
+    auto* json = cmd->add_flag("--json", o->json, "Machine-readable registry: every NodeSpec field");
+    auto* md = cmd->add_flag("--markdown", o->markdown, "The Markdown node reference (" + std::string(kRegenerate) + ")");
+    json->excludes(md);
+    md->excludes(json);
+    cmd->add_option("-o,--output", o->out, "Write to FILE (atomically) instead of stdout");
+    cmd->callback([o, &exitCode] {
+        const NodeRegistry& reg = NodeRegistry::instance();
+        std::vector<const NodeSpec*> all = reg.all();
+        const NodeSpec* one = nullptr;
+        if (!o->id.empty()) {
+            one = reg.find(o->id);
+            if (!one) {
+                std::string sug = suggestId(o->id, reg.ids());
+                std::fprintf(stderr, "specula: error: unknown node '%s'%s; `specula nodes` lists all %zu nodes\n",
+                             o->id.c_str(), sug.empty() ? "" : (" (did you mean '" + sug + "'?)").c_str(), all.size());
+                exitCode = kExitBadInput;
+                return;
+            }
+        }
+        std::string text;
+        if (o->json) {
+            ojson j;
+            if (one) {
+                j = nodeJson(*one);
+            } else {
+                j["nodes"] = ojson::array();
+                for (auto* s : all) j["nodes"].push_back(nodeJson(*s));
+            }
+            text = j.dump(2) + "\n";
+        } else if (o->markdown) {
+            text = one ? nodeMarkdown(*one) : registryMarkdown(all);
+            while (text.size() >= 2 && text[text.size() - 1] == '\n' && text[text.size() - 2] == '\n') text.pop_back();
+        } else {
+            text = one ? nodeText(*one) : listingText(all);
+        }
+        if (o->out.empty()) {
+            std::fwrite(text.data(), 1, text.size(), stdout);
+            std::fflush(stdout);
+            return;
+        }
+        namespace fs = std::filesystem;
+        fs::path dir = fs::path(o->out).parent_path();
+        if (!dir.empty() && !fs::is_directory(dir)) {
+            std::fprintf(stderr, "specula: error: output folder '%s' does not exist\n", dir.string().c_str());
+            exitCode = kExitIo;
+            return;
+        }
+        try {
+            writeFileAtomic(o->out, text);
+        } catch (const std::exception& e) {
+            std::fprintf(stderr, "specula: error: %s\n", e.what());
+            exitCode = kExitIo;
+        }
+    });
+}
+
+}  // namespace specula
