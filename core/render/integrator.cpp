@@ -122,7 +122,8 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
                 dwo = nb.sign * (spn.wo - sp.wo);
                 duv = nb.sign * (spn.uv - sp.uv);
             }
-            sp.hasDifferentials = sp.quad[0].valid && sp.quad[1].valid;
+            // At silhouettes a partner misses the object: that axis keeps its ray differential.
+            sp.hasDifferentials = sp.hasDifferentials || (sp.quad[0].valid && sp.quad[1].valid);
         }
         const Material& material = *scene_.materials[scene_.shapes[sp.shapeId].material];
         Closure closure;
