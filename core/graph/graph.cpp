@@ -407,8 +407,8 @@ void Program::execute(ShadingPoint& sp, ScratchArena& arena, float* r, Closure**
     ctx.arena = &arena;
     ctx.closures = cl;
     ctx.emission = em;
+    ctx.shadingFrame = &sp.frame;  // the first BSDF node writes the material's shading frame there
     for (const Instr& ins : code_) ins.fn(ctx, ins);
-    if (ctx.frameSet) sp.frame = ctx.frame;
     if (emission) *emission = outSlot_ >= 0 ? em[outSlot_] : Color3(0.f);
 }
 

@@ -166,6 +166,7 @@ struct EvalContext {
     Color3* emission = nullptr;         // emission per closure pool entry
     Frame frame;                        // shading frame chosen by the first BSDF node
     bool frameSet = false;
+    Frame* shadingFrame = nullptr;      // where that frame is published (the ShadingPoint's), if any
 };
 
 // ---- registry ------------------------------------------------------------------------------------
