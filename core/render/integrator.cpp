@@ -31,9 +31,9 @@ struct Throughput {
     Color3 total() const { return d + s; }
 };
 
-// Adds an indirect contribution L (radiance after at least one bounce) to the AOVs, clamped like
-// Cycles' clamp_indirect: the contribution is scaled so its largest component is at most 'clamp'.
-void addIndirect(SampleValue& out, const Throughput& beta, const Color3& L, float clamp) {
+// Adds radiance L arriving along the current path (weighted by beta). Radiance after at least one bounce is
+// clamped like Cycles' clamp_indirect: scaled so its largest component is at most 'clamp' (0 = off).
+void addPathRadiance(SampleValue& out, const Throughput& beta, const Color3& L, float clamp) {
     Color3 d = beta.d * L, s = beta.s * L;
     if (clamp > 0.f) {
         float m = maxComponent(d + s);
@@ -46,6 +46,19 @@ void addIndirect(SampleValue& out, const Throughput& beta, const Color3& L, floa
     out.diffuse += d;
     out.specular += s;
 }
+
+// Adds a light sample f·L at the vertex at 'depth'. At the camera hit the closure's own split decides
+// the AOV (beta is not split yet); deeper, the path's first-bounce category does, and it is indirect.
+void addLightSample(SampleValue& out, const Throughput& beta, int depth, const BsdfEval& f, const Color3& L,
+                    float clamp) {
+    if (depth == 0) {
+        out.diffuse += f.diffuse * L;
+        out.specular += f.specular * L;
+    } else {
+        addPathRadiance(out, beta, f.total() * L, clamp);
+    }
+}
+
 // Shadow ray from a shading point towards a light sample. The origin is offset off the surface, so the
 // ray is re-aimed at the sampled point from the offset origin and stops just short of it: otherwise it
 // would reach the emitter's own geometry (quad lights are in the BVH) and report the light as occluded.
@@ -133,7 +146,7 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
             if (depth == 0)
                 emitted += Le;
             else
-                addIndirect(out, beta, Le, clamp);
+                addPathRadiance(out, beta, Le, clamp);
         }
         const Vec3 wo = sp.frame.toLocal(sp.wo);
         if (depth == 0) {
@@ -161,12 +174,7 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
                         analyticLights |= uint64_t(1) << li;
                         if (!light.sample(sp.pGeom, u, ls) || glm::dot(ls.wi, sp.ng) <= 0.f) continue;
                         if (accel_.occluded(shadowRay(sp, ls))) continue;
-                        if (depth == 0) {
-                            out.diffuse += fa.diffuse * Lp;
-                            out.specular += fa.specular * Lp;
-                        } else {
-                            addIndirect(out, beta, fa.total() * Lp, clamp);
-                        }
+                        addLightSample(out, beta, depth, fa, Lp, clamp);
                         continue;
                     }
                 }
@@ -182,13 +190,7 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
             if (maxComponent(f.total()) <= 0.f) continue;
             if (accel_.occluded(shadowRay(sp, ls))) continue;
             float w = ls.delta ? 1.f : powerHeuristic(ls.pdf, closure.pdf(wo, wiL));
-            Color3 scale = ls.L * (w / ls.pdf);
-            if (depth == 0) {
-                out.diffuse += f.diffuse * scale;
-                out.specular += f.specular * scale;
-            } else {
-                addIndirect(out, beta, f.total() * scale, clamp);
-            }
+            addLightSample(out, beta, depth, f, ls.L * (w / ls.pdf), clamp);
         }
 
         // BSDF sampling: hits emitters (MIS) and continues the path.
@@ -223,12 +225,7 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
                 if (!l->isEnvironment()) continue;
                 Color3 Le = l->radiance(wiW);
                 float w = powerHeuristic(prevBsdfPdf, l->pdf(sp.pGeom, wiW, 0.f));
-                if (depth == 0) {
-                    out.diffuse += beta.d * Le * w;
-                    out.specular += beta.s * Le * w;
-                } else {
-                    addIndirect(out, beta, Le * w, clamp);
-                }
+                addPathRadiance(out, beta, Le * w, depth == 0 ? 0.f : clamp);
             }
             break;
         }
@@ -239,12 +236,7 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
             ShadingPoint lp = accel_.shadingPoint(next, h);
             Color3 Le = l.radiance(wiW, lp.frontFacing);
             float w = powerHeuristic(prevBsdfPdf, l.pdf(sp.pGeom, wiW, h.t));
-            if (depth == 0) {
-                out.diffuse += beta.d * Le * w;
-                out.specular += beta.s * Le * w;
-            } else {
-                addIndirect(out, beta, Le * w, clamp);
-            }
+            addPathRadiance(out, beta, Le * w, depth == 0 ? 0.f : clamp);
             break;
         }
         if (depth >= maxDepth_) break;
