@@ -66,6 +66,21 @@ void spc_frame(vec3 n, vec3 t, out vec3 T, out vec3 B, out vec3 N) {
 }
 vec3 spc_to_local(vec3 v, vec3 T, vec3 B, vec3 N) { return vec3(dot(v, T), dot(v, B), dot(v, N)); }
 
+// A reflection pair in the BSDF frame of (normal, tangent): local wo, wi and the unit half vector; false
+// when either direction is below the surface or the pair is degenerate (CPU: the lobes' eval preamble).
+bool spc_reflection_local(vec3 wo, vec3 wi, vec3 normal, vec3 tangent, out vec3 o, out vec3 i, out vec3 h) {
+    vec3 T, B, N;
+    spc_frame(normal, tangent, T, B, N);
+    o = spc_to_local(wo, T, B, N);
+    i = spc_to_local(wi, T, B, N);
+    h = o + i;
+    if (o.z <= 0.0 || i.z <= 0.0) return false;
+    float len = sqrt(dot(h, h));
+    if (len == 0.0) return false;
+    h /= len;
+    return true;
+}
+
 // Exact unpolarised dielectric reflectance, relative IOR eta (CPU: fresnelDielectric).
 float spc_fresnel_dielectric(float cosThetaI, float eta) {
     cosThetaI = clamp(cosThetaI, -1.0, 1.0);

@@ -35,15 +35,8 @@ void spc_bsdf_beckmann_lean(vec3 wo, vec3 wi, vec3 weight, float roughness, vec2
     float v = 0.5 * al * al;
     float a = xx + v, b = yy + v, c = xy;
     float det = a * b - c * c;
-    vec3 T, B, N;
-    spc_frame(normal, tangent, T, B, N);
-    vec3 o = spc_to_local(wo, T, B, N);
-    vec3 i = spc_to_local(wi, T, B, N);
-    if (o.z <= 0.0 || i.z <= 0.0) return;
-    vec3 h = o + i;
-    float len = sqrt(dot(h, h));
-    if (len == 0.0) return;
-    h /= len;
+    vec3 o, i, h;
+    if (!spc_reflection_local(wo, wi, normal, tangent, o, i, h)) return;
     if (h.z <= 0.0) return;
     float z2 = h.z * h.z;
     float dx = -h.x / h.z - slope.x, dy = -h.y / h.z - slope.y;

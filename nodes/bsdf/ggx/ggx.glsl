@@ -20,15 +20,8 @@ void spc_bsdf_ggx(vec3 wo, vec3 wi, vec3 weight, float roughness, float anisotro
     float alpha = roughness * roughness;
     float aspect = sqrt(max(1.0 - 0.9 * anisotropy, 0.0));
     float ax = max(alpha / aspect, 1e-4), ay = max(alpha * aspect, 1e-4);
-    vec3 T, B, N;
-    spc_frame(normal, tangent, T, B, N);
-    vec3 o = spc_to_local(wo, T, B, N);
-    vec3 i = spc_to_local(wi, T, B, N);
-    if (o.z <= 0.0 || i.z <= 0.0) return;
-    vec3 h = o + i;
-    float len = sqrt(dot(h, h));
-    if (len == 0.0) return;
-    h /= len;
+    vec3 o, i, h;
+    if (!spc_reflection_local(wo, wi, normal, tangent, o, i, h)) return;
     float d = spc_ggx_ndf(h, ax, ay);
     float g = 1.0 / (1.0 + spc_ggx_lambda(o, ax, ay) + spc_ggx_lambda(i, ax, ay));
     float c = dot(o, h);
