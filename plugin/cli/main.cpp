@@ -1,6 +1,7 @@
 // The `specula` command-line tool: render JSON scenes, compare images, validate scenes. A thin layer
 // over the library API (core/api/specula.h); exit codes are documented in docs/cli.md.
 #include "core/api/specula.h"
+#include "plugin/cli/cli_output.h"
 #include "plugin/cli/graph_commands.h"
 #include "plugin/cli/normalmap_command.h"
 #include "plugin/cli/nodes_command.h"
@@ -121,9 +122,7 @@ int main(int argc, char** argv) {
             exitCode = kExitUsage;
             return;
         }
-        fs::path outDir = fs::path(outPath).parent_path();
-        if (!outDir.empty() && !fs::is_directory(outDir)) {
-            std::fprintf(stderr, "specula: error: output folder '%s' does not exist\n", outDir.string().c_str());
+        if (!outputFolderExists(outPath)) {
             exitCode = kExitIo;
             return;
         }

@@ -8,6 +8,7 @@
 #include "core/graph/node_spec.h"
 #include "core/io/image_io.h"
 #include "core/util/error.h"
+#include "plugin/cli/cli_output.h"
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
@@ -527,10 +528,7 @@ void addNodesCommand(CLI::App& app, int& exitCode) {
             std::fflush(stdout);
             return;
         }
-        namespace fs = std::filesystem;
-        fs::path dir = fs::path(o->out).parent_path();
-        if (!dir.empty() && !fs::is_directory(dir)) {
-            std::fprintf(stderr, "specula: error: output folder '%s' does not exist\n", dir.string().c_str());
+        if (!outputFolderExists(o->out)) {
             exitCode = kExitIo;
             return;
         }

@@ -4,6 +4,7 @@
 
 #include "core/texture/normal_map_gen.h"
 #include "core/util/error.h"
+#include "plugin/cli/cli_output.h"
 
 #include <CLI/CLI.hpp>
 
@@ -32,10 +33,7 @@ void addNormalmapCommand(CLI::App& app, int& exitCode) {
     cmd->add_option("-o,--output", o->out, "Output file: .exr (float) or .png (16-bit)")->required();
     cmd->add_flag("--quiet", o->quiet, "Print nothing on success");
     cmd->callback([o, &exitCode] {
-        namespace fs = std::filesystem;
-        fs::path dir = fs::path(o->out).parent_path();
-        if (!dir.empty() && !fs::is_directory(dir)) {
-            std::fprintf(stderr, "specula: error: output folder '%s' does not exist\n", dir.string().c_str());
+        if (!outputFolderExists(o->out)) {
             exitCode = kExitIo;
             return;
         }
