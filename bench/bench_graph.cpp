@@ -50,7 +50,7 @@ void BM_GgxGraph(benchmark::State& state) {
     size_t k = 0;
     for (auto _ : state) {
         s.mat->shade(sp, arena, cl);
-        BsdfEval e = cl.eval(s.dirs[k & 63], s.dirs[(k * 7 + 3) & 63]);
+        BsdfEval e = cl.evalPdf({s.dirs[k & 63], s.dirs[(k * 7 + 3) & 63]}).f;
         benchmark::DoNotOptimize(e);
         arena.reset();
         ++k;
@@ -72,10 +72,10 @@ void BM_GgxDirect(benchmark::State& state) {
         benchmark::DoNotOptimize(anisotropy);
         float alpha = roughness * roughness, aspect = std::sqrt(std::max(1.f - 0.9f * anisotropy, 0.f));
         Vec3 n = glm::normalize(sp.n);
-        sp.frame = Frame::fromNormalTangent(n, Vec3(sp.tangent));
+        Frame frame = Frame::fromNormalTangent(n, Vec3(sp.tangent));
         cl.clear();
-        cl.add(Color3(1.f), arena.make<GgxLobe>(alpha / aspect, alpha * aspect, Fresnel::schlick(f0)));
-        BsdfEval e = cl.eval(s.dirs[k & 63], s.dirs[(k * 7 + 3) & 63]);
+        cl.add(Color3(1.f), arena.make<GgxLobe>(alpha / aspect, alpha * aspect, Fresnel::schlick(f0)), frame);
+        BsdfEval e = cl.evalPdf({s.dirs[k & 63], s.dirs[(k * 7 + 3) & 63]}).f;
         benchmark::DoNotOptimize(e);
         arena.reset();
         ++k;

@@ -390,7 +390,7 @@ Program Program::compile(const GraphDesc& g, const std::vector<std::pair<int, in
     return prog;
 }
 
-void Program::execute(ShadingPoint& sp, ScratchArena& arena, float* r, Closure** cl, Color3* em, Closure* out,
+void Program::execute(const ShadingPoint& sp, ScratchArena& arena, float* r, Closure** cl, Color3* em, Closure* out,
                       Color3* emission) const {
     std::memcpy(r, tmpl_.data(), tmpl_.size() * sizeof(float));
     for (size_t s = 0; s < slots_; ++s) {
@@ -407,12 +407,11 @@ void Program::execute(ShadingPoint& sp, ScratchArena& arena, float* r, Closure**
     ctx.arena = &arena;
     ctx.closures = cl;
     ctx.emission = em;
-    ctx.shadingFrame = &sp.frame;  // the first BSDF node writes the material's shading frame there
     for (const Instr& ins : code_) ins.fn(ctx, ins);
     if (emission) *emission = outSlot_ >= 0 ? em[outSlot_] : Color3(0.f);
 }
 
-const float* Program::run(ShadingPoint& sp, ScratchArena& arena, Closure* out, Color3* emission) const {
+const float* Program::run(const ShadingPoint& sp, ScratchArena& arena, Closure* out, Color3* emission) const {
     float* r = static_cast<float*>(arena.allocate(tmpl_.size() * sizeof(float) + 4, 16));
     size_t n = std::max<size_t>(slots_, 1);
     auto** cl = static_cast<Closure**>(arena.allocate(n * sizeof(Closure*), alignof(Closure*)));
@@ -421,7 +420,7 @@ const float* Program::run(ShadingPoint& sp, ScratchArena& arena, Closure* out, C
     return r;
 }
 
-void Program::shade(ShadingPoint& sp, ScratchArena& arena, Closure* out, Color3* emission) const {
+void Program::shade(const ShadingPoint& sp, ScratchArena& arena, Closure* out, Color3* emission) const {
     constexpr size_t kStackRegs = 256, kStackSlots = 16;
     if (tmpl_.size() > kStackRegs || slots_ > kStackSlots) {
         run(sp, arena, out, emission);

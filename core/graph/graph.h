@@ -58,13 +58,13 @@ public:
     static Program compile(const GraphDesc& g, const std::vector<std::pair<int, int>>& roots,
                            const GraphLoadContext* load);
 
-    // Runs the program at sp. If 'out' is given it receives the closure of roots[0] (closure-typed);
-    // 'emission' receives that closure's emission. sp.frame is set to the first BSDF's frame.
-    // Returns the register file (valid until the arena is reset).
-    const float* run(ShadingPoint& sp, ScratchArena& arena, Closure* out, Color3* emission) const;
+    // Runs the program at sp (never modified). If 'out' is given it receives the closure of roots[0]
+    // (closure-typed); 'emission' receives that closure's emission. Returns the register file (valid until the
+    // arena is reset).
+    const float* run(const ShadingPoint& sp, ScratchArena& arena, Closure* out, Color3* emission) const;
     // Same as run() for the renderer's hot path: registers and the closure pool live on the stack
     // when small (no arena traffic besides the lobes).
-    void shade(ShadingPoint& sp, ScratchArena& arena, Closure* out, Color3* emission) const;
+    void shade(const ShadingPoint& sp, ScratchArena& arena, Closure* out, Color3* emission) const;
 
     uint16_t rootRegister(size_t i) const { return rootRegs_[i]; }
     size_t instructionCount() const { return code_.size(); }
@@ -74,7 +74,7 @@ public:
     bool emissive() const { return emissive_; }
 
 private:
-    void execute(ShadingPoint& sp, ScratchArena& arena, float* r, Closure** cl, Color3* em, Closure* out, Color3* emission) const;
+    void execute(const ShadingPoint& sp, ScratchArena& arena, float* r, Closure** cl, Color3* em, Closure* out, Color3* emission) const;
     struct Load {
         GeomBinding binding;
         uint16_t reg;

@@ -3,19 +3,9 @@
 
 namespace specula {
 
-void GraphMaterial::shade(ShadingPoint& sp, ScratchArena& arena, Closure& out) const {
+void GraphMaterial::shade(const ShadingPoint& sp, ScratchArena& arena, Closure& out, Color3* emission) const {
     out.clear();
-    program_.shade(sp, arena, &out, nullptr);
-}
-
-Color3 GraphMaterial::emission(const ShadingPoint& sp) const {
-    if (!program_.emissive()) return Color3(0.f);
-    thread_local ScratchArena arena(16 * 1024);
-    ShadingPoint copy = sp;
-    Color3 e(0.f);
-    program_.shade(copy, arena, nullptr, &e);
-    arena.reset();
-    return e;
+    program_.shade(sp, arena, &out, emission);
 }
 
 std::shared_ptr<Material> loadGraphMaterial(const nlohmann::json& material, const std::string& jsonPointer,

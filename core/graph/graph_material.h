@@ -24,8 +24,7 @@ class GraphMaterial final : public Material {
 public:
     GraphMaterial(graph::GraphDesc desc, graph::Program program)
         : desc_(std::move(desc)), program_(std::move(program)) {}
-    void shade(ShadingPoint& sp, ScratchArena& arena, Closure& out) const override;
-    Color3 emission(const ShadingPoint& sp) const override;
+    void shade(const ShadingPoint& sp, ScratchArena& arena, Closure& out, Color3* emission = nullptr) const override;
     bool isEmissive() const override { return program_.emissive(); }
     const graph::GraphDesc& desc() const { return desc_; }
     const graph::Program& program() const { return program_; }

@@ -164,9 +164,6 @@ struct EvalContext {
     ScratchArena* arena = nullptr;      // lobes are allocated here
     Closure* const* closures = nullptr; // closure pool: a closure register holds an index into it
     Color3* emission = nullptr;         // emission per closure pool entry
-    Frame frame;                        // shading frame chosen by the first BSDF node
-    bool frameSet = false;
-    Frame* shadingFrame = nullptr;      // where that frame is published (the ShadingPoint's), if any
 };
 
 // ---- registry ------------------------------------------------------------------------------------

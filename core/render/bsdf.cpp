@@ -1,4 +1,5 @@
-// Closure (weighted lobe sum) evaluation, mixture sampling, and the scratch arena.
+// Closure (weighted lobe sum, one frame per lobe) evaluation, mixture sampling, polygon integration, and the
+// scratch arena.
 #include "core/render/bsdf.h"
 
 namespace specula {
@@ -22,10 +23,15 @@ void ScratchArena::reset() {
     offset_ = 0;
 }
 
-void Closure::add(const Color3& weight, const BsdfLobe* lobe) {
+namespace {
+bool sameFrame(const Frame& a, const Frame& b) { return a.n == b.n && a.t == b.t && a.b == b.b; }
+}  // namespace
+
+void Closure::add(const Color3& weight, const BsdfLobe* lobe, const Frame& frame) {
     if (!lobe || count_ >= kMaxLobes || maxComponent(weight) <= 0.f) return;
     lobes_[count_] = lobe;
     weights_[count_] = weight;
+    frames_[count_] = frame;
     ++count_;
 }
 
@@ -34,22 +40,14 @@ void Closure::scale(const Color3& s) {
 }
 
 void Closure::append(const Closure& other, const Color3& weight) {
-    for (int i = 0; i < other.count_; ++i) add(other.weights_[i] * weight, other.lobes_[i]);
+    for (int i = 0; i < other.count_; ++i) add(other.weights_[i] * weight, other.lobes_[i], other.frames_[i]);
 }
 
-BsdfEval Closure::eval(const Vec3& wo, const Vec3& wi) const {
-    BsdfEval r;
-    for (int i = 0; i < count_; ++i) {
-        Color3 f = weights_[i] * lobes_[i]->eval(wo, wi);
-        (lobes_[i]->kind() == LobeKind::Diffuse ? r.diffuse : r.specular) += f;
-    }
-    return r;
-}
-
-void Closure::selectionWeights(const Vec3& wo, float* w, float& sum) const {
+// Selection weights from each lobe's local wo (woLocal[i]).
+void Closure::selectionWeights(const Vec3* woLocal, float* w, float& sum) const {
     sum = 0.f;
     for (int i = 0; i < count_; ++i) {
-        w[i] = std::max(luminance(weights_[i] * lobes_[i]->albedo(wo)), 0.f);
+        w[i] = std::max(luminance(weights_[i] * lobes_[i]->albedo(woLocal[i])), 0.f);
         sum += w[i];
     }
     if (sum <= 0.f) {  // fall back to uniform selection so no lobe becomes unreachable
@@ -58,18 +56,25 @@ void Closure::selectionWeights(const Vec3& wo, float* w, float& sum) const {
     }
 }
 
-float Closure::pdf(const Vec3& wo, const Vec3& wi) const {
-    if (count_ == 0) return 0.f;
+BsdfValue Closure::evalPdf(const BsdfQuery& q) const {
+    BsdfValue r;
+    if (count_ == 0) return r;
+    Vec3 wo[kMaxLobes];
+    for (int i = 0; i < count_; ++i) wo[i] = frames_[i].toLocal(q.wo);
     float w[kMaxLobes], sum;
     selectionWeights(wo, w, sum);
-    float p = 0.f;
-    for (int i = 0; i < count_; ++i)
-        if (w[i] > 0.f) p += w[i] / sum * lobes_[i]->pdf(wo, wi);
-    return p;
+    for (int i = 0; i < count_; ++i) {
+        LobeValue v = lobes_[i]->evalPdf(LobeQuery{wo[i], frames_[i].toLocal(q.wi), q.lightDistance});
+        if ((q.lobes >> i) & 1) (lobes_[i]->kind() == LobeKind::Diffuse ? r.f.diffuse : r.f.specular) += weights_[i] * v.f;
+        if (w[i] > 0.f) r.pdf += w[i] / sum * v.pdf;
+    }
+    return r;
 }
 
-bool Closure::sample(const Vec3& wo, float uLobe, const Vec2& u, BsdfSample& out) const {
+bool Closure::sample(const BsdfQuery& q, float uLobe, const Vec2& u, BsdfSample& out) const {
     if (count_ == 0) return false;
+    Vec3 wo[kMaxLobes];
+    for (int i = 0; i < count_; ++i) wo[i] = frames_[i].toLocal(q.wo);
     float w[kMaxLobes], sum;
     selectionWeights(wo, w, sum);
     float target = uLobe * sum, acc = 0.f;
@@ -81,31 +86,60 @@ bool Closure::sample(const Vec3& wo, float uLobe, const Vec2& u, BsdfSample& out
             break;
         }
     }
-    Vec3 wi;
-    if (!lobes_[chosen]->sample(wo, u, wi)) return false;
-    out.wi = wi;
+    Vec3 wiChosen;
+    if (!lobes_[chosen]->sample(LobeQuery{wo[chosen], wo[chosen], q.lightDistance}, u, wiChosen)) return false;
+    const Frame& fc = frames_[chosen];
+    out.wi = fc.toWorld(wiChosen);
     out.kind = lobes_[chosen]->kind();
-    out.pdf = pdf(wo, wi);
+    // Lobes sharing the sampling lobe's frame see the sampled local direction itself (no round trip through world).
+    BsdfEval f;
+    float pdf = 0.f;
+    for (int i = 0; i < count_; ++i) {
+        Vec3 wi = sameFrame(frames_[i], fc) ? wiChosen : frames_[i].toLocal(out.wi);
+        LobeValue v = lobes_[i]->evalPdf(LobeQuery{wo[i], wi, q.lightDistance});
+        if ((q.lobes >> i) & 1) (lobes_[i]->kind() == LobeKind::Diffuse ? f.diffuse : f.specular) += weights_[i] * v.f;
+        if (w[i] > 0.f) pdf += w[i] / sum * v.pdf;
+    }
+    out.pdf = pdf;
     if (!(out.pdf > 0.f)) return false;
-    out.f = eval(wo, wi);
+    out.f = f;
     return true;
 }
 
-bool Closure::integratePolygon(const Vec3& wo, const Vec3* vertices, int count, BsdfEval& out) const {
-    BsdfEval sum;
+LobeMask Closure::integratePolygon(const BsdfQuery& q, const Vec3* vertices, int count, BsdfEval& out) const {
+    LobeMask done = 0;
+    Vec3 local[8];
+    if (count > 8) return 0;
     for (int i = 0; i < count_; ++i) {
+        if (!((q.lobes >> i) & 1)) continue;
+        for (int k = 0; k < count; ++k) local[k] = frames_[i].toLocal(vertices[k]);
         Color3 r;
-        if (!lobes_[i]->integratePolygon(wo, vertices, count, r)) return false;
-        (lobes_[i]->kind() == LobeKind::Diffuse ? sum.diffuse : sum.specular) += weights_[i] * r;
+        LobeQuery lq{frames_[i].toLocal(q.wo), frames_[i].toLocal(q.wo), q.lightDistance};
+        if (!lobes_[i]->integratePolygon(lq, local, count, r)) continue;
+        (lobes_[i]->kind() == LobeKind::Diffuse ? out.diffuse : out.specular) += weights_[i] * r;
+        done |= LobeMask(1) << i;
     }
-    out = sum;
-    return count_ > 0;
+    return done;
 }
 
 Color3 Closure::albedo(const Vec3& wo) const {
     Color3 a(0.f);
-    for (int i = 0; i < count_; ++i) a += weights_[i] * lobes_[i]->albedo(wo);
+    for (int i = 0; i < count_; ++i) a += weights_[i] * lobes_[i]->albedo(frames_[i].toLocal(wo));
     return a;
+}
+
+const Frame& Closure::dominantFrame(const Vec3& wo, const Frame& fallback) const {
+    if (count_ == 0) return fallback;
+    int best = 0;
+    float bestW = -1.f;
+    for (int i = 0; i < count_; ++i) {
+        float w = luminance(weights_[i] * lobes_[i]->albedo(frames_[i].toLocal(wo)));
+        if (w > bestW) {
+            bestW = w;
+            best = i;
+        }
+    }
+    return frames_[best];
 }
 
 }  // namespace specula

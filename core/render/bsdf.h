@@ -1,5 +1,5 @@
-// BSDF interface of the renderer: lobes in the local shading frame (z = shading normal) offering
-// eval (f·|cos θi|), pdf and sample, and the Closure, a weighted sum of lobes that materials build.
+// BSDF interface of the renderer: lobes answer queries (BsdfQuery: wo, wi, the light, a lobe mask) with
+// f·|cos θi| and pdf together, and the Closure, a weighted sum of lobes each in its own frame, that materials build.
 #pragma once
 
 #include "core/math/math.h"
@@ -7,6 +7,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <new>
 #include <type_traits>
@@ -29,33 +30,70 @@ struct BsdfEval {
     }
 };
 
+// Bit i selects lobe i of a closure (Closure::kMaxLobes ≤ 32).
+using LobeMask = uint32_t;
+constexpr LobeMask kAllLobes = ~LobeMask(0);
+
+// What a closure is asked, in world space (Mitsuba's BSDFContext, MaterialX's ClosureData): everything that
+// depends on the light arrives here, so no lobe reads per-light state from the shading point.
+struct BsdfQuery {
+    Vec3 wo{0, 0, 1};  // towards the viewer / previous vertex (unit)
+    Vec3 wi{0, 0, 1};  // towards the light (unit); ignored by sample()
+    // Distance to a point light being sampled (lobes filtered by half-vector derivatives differentiate wi with
+    // it, filtered-ggx.md §5.1); +inf for directions (directional, environment and area lights, BSDF samples).
+    float lightDistance = std::numeric_limits<float>::infinity();
+    LobeMask lobes = kAllLobes;  // which lobes answer (the others contribute nothing)
+};
+
+// The same query in one lobe's local frame (z = the lobe's normal).
+struct LobeQuery {
+    Vec3 wo{0, 0, 1};
+    Vec3 wi{0, 0, 1};
+    float lightDistance = std::numeric_limits<float>::infinity();
+};
+
+// A lobe's answer: f·|cos θi| and the solid-angle density with which sample() produces wi.
+struct LobeValue {
+    Color3 f{0.f};
+    float pdf = 0.f;
+};
+
+// A closure's answer: f·|cos θi| by category and the mixture pdf of Closure::sample.
+struct BsdfValue {
+    BsdfEval f;
+    float pdf = 0.f;
+};
+
 struct BsdfSample {
-    Vec3 wi{0.f};          // sampled incident direction (local frame)
+    Vec3 wi{0.f};          // sampled incident direction (world)
     BsdfEval f;            // f·|cos θi| of the whole closure for (wo, wi)
     float pdf = 0.f;       // solid-angle pdf of the whole closure (mixture), > 0 on success
     LobeKind kind = LobeKind::Diffuse;  // category of the lobe that generated wi
 };
 
-// One scattering lobe. All directions are unit vectors in the local shading frame.
+// One scattering lobe. All directions are unit vectors in the lobe's local frame.
 class BsdfLobe {
 public:
     virtual ~BsdfLobe() = default;
     virtual LobeKind kind() const = 0;
-    // f(wo, wi)·|cos θi|; zero where the lobe does not scatter (e.g. wi below the surface for reflection).
-    virtual Color3 eval(const Vec3& wo, const Vec3& wi) const = 0;
-    // Solid-angle density with which sample() produces wi.
-    virtual float pdf(const Vec3& wo, const Vec3& wi) const = 0;
-    // Draws wi from u in [0,1)^2. Returns false if no direction could be produced.
-    virtual bool sample(const Vec3& wo, const Vec2& u, Vec3& wi) const = 0;
+    // The one evaluation entry: f(wo, wi)·|cos θi| and pdf(wi | wo); zero where the lobe does not scatter.
+    virtual LobeValue evalPdf(const LobeQuery& q) const = 0;
+    // Draws wi from u in [0,1)^2 for q.wo (q.wi is ignored). Returns false if no direction could be produced.
+    virtual bool sample(const LobeQuery& q, const Vec2& u, Vec3& wi) const = 0;
     // Directional albedo estimate ∫ f cos dwi (used for lobe selection and the albedo AOV).
     virtual Color3 albedo(const Vec3& wo) const = 0;
-    // Hook for analytic integration over a polygonal emitter (LTC area lights, Heitz et al. 2016):
+    // Analytic integration over a polygonal emitter (LTC area lights, Heitz et al. 2016):
     // result = ∫_P f(wo, wi) |cos θi| dωi, the polygon's vertices given in the local frame relative to
     // the shading point (not normalised, counter-clockwise seen from the shading point). The light's
     // radiance is applied by the caller. Returns false when the lobe has no closed form.
-    virtual bool integratePolygon(const Vec3& wo, const Vec3* vertices, int count, Color3& result) const {
+    virtual bool integratePolygon(const LobeQuery& q, const Vec3* vertices, int count, Color3& result) const {
         return false;
     }
+
+    // Conveniences for tests and tools: a directional query (no light distance).
+    Color3 eval(const Vec3& wo, const Vec3& wi) const { return evalPdf(LobeQuery{wo, wi}).f; }
+    float pdf(const Vec3& wo, const Vec3& wi) const { return evalPdf(LobeQuery{wo, wi}).pdf; }
+    bool sample(const Vec3& wo, const Vec2& u, Vec3& wi) const { return sample(LobeQuery{wo, wo}, u, wi); }
 };
 
 // Bump allocator for per-shading-point lobes; reset after each shading point (no heap in the hot path).
@@ -92,14 +130,15 @@ private:
     std::vector<std::unique_ptr<std::byte[]>> overflow_;
 };
 
-// A weighted sum of lobes: what a material returns at a shading point.
+// A weighted sum of lobes, each with its own orthonormal frame (world space): what a material returns at a
+// shading point. Queries and samples are in world space; the closure rotates them into each lobe's frame.
 class Closure {
 public:
     static constexpr int kMaxLobes = 8;
 
     void clear() { count_ = 0; }
-    // Adds weight·lobe; lobes beyond kMaxLobes or with zero weight are dropped.
-    void add(const Color3& weight, const BsdfLobe* lobe);
+    // Adds weight·lobe whose local frame is 'frame'; lobes beyond kMaxLobes or with zero weight are dropped.
+    void add(const Color3& weight, const BsdfLobe* lobe, const Frame& frame);
     // Multiplies every lobe weight (closure.mix / scaling).
     void scale(const Color3& s);
     void append(const Closure& other, const Color3& weight = Color3(1.f));
@@ -108,20 +147,30 @@ public:
     bool empty() const { return count_ == 0; }
     const BsdfLobe* lobe(int i) const { return lobes_[i]; }
     const Color3& weight(int i) const { return weights_[i]; }
+    const Frame& frame(int i) const { return frames_[i]; }
+    LobeMask allLobes() const { return count_ >= 32 ? kAllLobes : (LobeMask(1) << count_) - 1; }
 
-    BsdfEval eval(const Vec3& wo, const Vec3& wi) const;
-    float pdf(const Vec3& wo, const Vec3& wi) const;
+    // f·cos by category and the mixture pdf of sample() over the lobes in q.lobes (the selection
+    // probabilities always count every lobe, so the pdf is that of sample() whatever the mask).
+    BsdfValue evalPdf(const BsdfQuery& q) const;
     // Chooses a lobe with probability ∝ luminance(weight·albedo), samples it, returns the mixture
     // f·cos and pdf of the whole closure (so MIS with light sampling stays unbiased).
-    bool sample(const Vec3& wo, float uLobe, const Vec2& u, BsdfSample& out) const;
+    bool sample(const BsdfQuery& q, float uLobe, const Vec2& u, BsdfSample& out) const;
     Color3 albedo(const Vec3& wo) const;
-    // Σ weight · lobe.integratePolygon, split by category; false unless every lobe has a closed form.
-    bool integratePolygon(const Vec3& wo, const Vec3* vertices, int count, BsdfEval& out) const;
+    // Σ weight · lobe.integratePolygon over the lobes in q.lobes that have a closed form, split by category,
+    // added to 'out'. The vertices are world-space offsets from the shading point. Returns the mask of the lobes
+    // integrated analytically; the caller estimates the others (e.g. sampled next-event estimation with MIS).
+    LobeMask integratePolygon(const BsdfQuery& q, const Vec3* vertices, int count, BsdfEval& out) const;
+    // The frame of the lobe that scatters most towards wo (largest selection weight; the first on ties), or
+    // 'fallback' for an empty closure: the normal AOV and the quad-derivative partner frames. It depends on the
+    // closure's structure only, never on node ids.
+    const Frame& dominantFrame(const Vec3& wo, const Frame& fallback) const;
 
 private:
-    void selectionWeights(const Vec3& wo, float* w, float& sum) const;
+    void selectionWeights(const Vec3* woLocal, float* w, float& sum) const;
     std::array<const BsdfLobe*, kMaxLobes> lobes_{};
     std::array<Color3, kMaxLobes> weights_{};
+    std::array<Frame, kMaxLobes> frames_{};
     int count_ = 0;
 };
 

@@ -6,6 +6,7 @@
 #include "core/render/sampling.h"
 #include "core/scene/scene.h"
 
+#include <array>
 #include <limits>
 
 namespace specula {
@@ -25,6 +26,9 @@ Color3 Integrator::environment(const Vec3& dir) const {
 }
 
 namespace {
+// Lights whose polygon integrals are tracked per path vertex (the rest are sampled only).
+constexpr size_t kMaxAnalyticLights = 64;
+
 // Radiance weights of the diffuse and specular AOVs along the current path.
 struct Throughput {
     Color3 d{0.f}, s{0.f};
@@ -119,13 +123,13 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
                 Hit hn;
                 if (!accel_.intersect(quad->ray[k], hn) || scene_.shapes[hn.shape].areaLight >= 0) continue;
                 ShadingPoint spn = accel_.shadingPoint(quad->ray[k], hn);
-                Closure ignored;
-                scene_.materials[scene_.shapes[spn.shapeId].material]->shade(spn, arena, ignored);
+                Closure partner;
+                scene_.materials[scene_.shapes[spn.shapeId].material]->shade(spn, arena, partner);
                 nb.valid = true;
                 nb.sign = quad->sign[k];
                 nb.p = spn.p;
                 nb.wo = spn.wo;
-                nb.frame = spn.frame;
+                nb.frame = partner.dominantFrame(spn.wo, spn.frame);
                 Vec3& dp = k == 0 ? sp.dpdx : sp.dpdy;
                 Vec3& dn = k == 0 ? sp.dndx : sp.dndy;
                 Vec3& dwo = k == 0 ? sp.dwodx : sp.dwody;
@@ -140,68 +144,80 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
         }
         const Material& material = *scene_.materials[scene_.shapes[sp.shapeId].material];
         Closure closure;
-        material.shade(sp, arena, closure);
+        Color3 Le(0.f);
+        // One shading pass gives the closure and the emission; the shading point stays const while it runs.
+        material.shade(sp, arena, closure, material.isEmissive() ? &Le : nullptr);
         if (material.isEmissive()) {
-            Color3 Le = material.emission(sp);
             if (depth == 0)
                 emitted += Le;
             else
                 addPathRadiance(out, beta, Le, clamp);
         }
-        const Vec3 wo = sp.frame.toLocal(sp.wo);
+        const Vec3 wo = sp.wo;
         if (depth == 0) {
             out.albedo = closure.albedo(wo);
-            out.normal = sp.frame.n;
+            out.normal = closure.dominantFrame(wo, sp.frame).n;
         }
         if (closure.empty()) break;
 
-        // Next-event estimation: one sample of every light. Polygonal lights whose whole closure has a
-        // closed-form polygon integral (BsdfLobe::integratePolygon, e.g. LTC lobes) are integrated
-        // analytically, times the visibility of one sampled point; BSDF sampling then skips them.
-        uint64_t analyticLights = 0;
+        // Next-event estimation: one sample of every light. For polygonal lights, the lobes with a closed-form
+        // polygon integral (BsdfLobe::integratePolygon, e.g. LTC lobes) are integrated analytically, times the
+        // visibility of one sampled point; the other lobes are estimated from the same light sample with MIS, and
+        // BSDF sampling later counts only those for this light.
+        std::array<LobeMask, kMaxAnalyticLights> analytic{};
         for (size_t li = 0; li < scene_.lights.size(); ++li) {
             const Light& light = *scene_.lights[li];
             LightSample ls;
             Vec2 u = sampler.get2D();
-            if (li < 64) {
+            BsdfQuery q;
+            q.wo = wo;
+            if (li < kMaxAnalyticLights) {
                 Vec3 poly[4];
                 Color3 Lp;
                 int n = light.polygon(sp.pGeom, poly, Lp);
                 BsdfEval fa;
                 if (n > 0) {
-                    for (int k = 0; k < n; ++k) poly[k] = sp.frame.toLocal(poly[k] - sp.pGeom);
-                    if (closure.integratePolygon(wo, poly, n, fa)) {
-                        analyticLights |= uint64_t(1) << li;
+                    for (int k = 0; k < n; ++k) poly[k] = poly[k] - sp.pGeom;
+                    analytic[li] = closure.integratePolygon(q, poly, n, fa);
+                    if (analytic[li] != 0) {
                         if (!light.sample(sp.pGeom, u, ls) || glm::dot(ls.wi, sp.ng) <= 0.f) continue;
                         if (accel_.occluded(shadowRay(sp, ls))) continue;
                         addLightSample(out, beta, depth, fa, Lp, clamp);
+                        q.lobes = ~analytic[li];
+                        if ((q.lobes & closure.allLobes()) == 0 || !(ls.pdf > 0.f) || maxComponent(ls.L) <= 0.f) continue;
+                        q.wi = ls.wi;  // the remaining lobes: sampled, visibility known (area lights are not delta)
+                        BsdfValue v = closure.evalPdf(q);
+                        if (maxComponent(v.f.total()) <= 0.f) continue;
+                        addLightSample(out, beta, depth, v.f, ls.L * (powerHeuristic(ls.pdf, v.pdf) / ls.pdf), clamp);
                         continue;
                     }
                 }
             }
             if (!light.sample(sp.pGeom, u, ls) || !(ls.pdf > 0.f) || maxComponent(ls.L) <= 0.f) continue;
-            Vec3 wiL = sp.frame.toLocal(ls.wi);
             // Reject directions on the wrong side of the geometric surface (light leaks through normals).
             if (glm::dot(ls.wi, sp.ng) <= 0.f) continue;
+            q.wi = ls.wi;
             // Delta lights only: area/environment lights are also reached by BSDF sampling (where dwi = 0), and MIS
             // needs one f for both strategies (filtered-ggx.md §5.1).
-            sp.lightDistance = ls.delta ? ls.distance : std::numeric_limits<float>::infinity();
-            BsdfEval f = closure.eval(wo, wiL);
-            if (maxComponent(f.total()) <= 0.f) continue;
+            if (ls.delta) q.lightDistance = ls.distance;
+            BsdfValue v = closure.evalPdf(q);
+            if (maxComponent(v.f.total()) <= 0.f) continue;
             if (accel_.occluded(shadowRay(sp, ls))) continue;
-            float w = ls.delta ? 1.f : powerHeuristic(ls.pdf, closure.pdf(wo, wiL));
-            addLightSample(out, beta, depth, f, ls.L * (w / ls.pdf), clamp);
+            float w = ls.delta ? 1.f : powerHeuristic(ls.pdf, v.pdf);
+            addLightSample(out, beta, depth, v.f, ls.L * (w / ls.pdf), clamp);
         }
 
         // BSDF sampling: hits emitters (MIS) and continues the path.
-        sp.lightDistance = std::numeric_limits<float>::infinity();
         BsdfSample bs;
         float uLobe = sampler.get1D();
         Vec2 uDir = sampler.get2D();
         float uRr = sampler.get1D();
-        if (!closure.sample(wo, uLobe, uDir, bs)) break;
-        Vec3 wiW = sp.frame.toWorld(bs.wi);
+        BsdfQuery sq;
+        sq.wo = wo;
+        if (!closure.sample(sq, uLobe, uDir, bs)) break;
+        const Vec3 wiW = bs.wi;
         if (glm::dot(wiW, sp.ng) <= 0.f) break;  // below the geometric surface
+        const Throughput betaPrev = beta;
         if (depth == 0) {
             beta.d = bs.f.diffuse / bs.pdf;
             beta.s = bs.f.specular / bs.pdf;
@@ -231,12 +247,32 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
         }
         const ShapeInstance& nextShape = scene_.shapes[h.shape];
         if (nextShape.areaLight >= 0) {
-            if (nextShape.areaLight < 64 && (analyticLights >> nextShape.areaLight) & 1) break;  // counted analytically
+            const LobeMask done = nextShape.areaLight < int(kMaxAnalyticLights) ? analytic[nextShape.areaLight] : 0;
+            if ((closure.allLobes() & ~done) == 0) break;  // counted analytically
             const Light& l = *scene_.lights[nextShape.areaLight];
             ShadingPoint lp = accel_.shadingPoint(next, h);
             Color3 Le = l.radiance(wiW, lp.frontFacing);
             float w = powerHeuristic(prevBsdfPdf, l.pdf(sp.pGeom, wiW, h.t));
-            addPathRadiance(out, beta, Le * w, depth == 0 ? 0.f : clamp);
+            if (done == 0) {
+                addPathRadiance(out, beta, Le * w, depth == 0 ? 0.f : clamp);
+            } else {
+                // Only the lobes this light's analytic integral left out: their f·cos over the mixture pdf.
+                BsdfQuery rq;
+                rq.wo = wo;
+                rq.wi = wiW;
+                rq.lobes = ~done;
+                BsdfEval fr = closure.evalPdf(rq).f;
+                Throughput part = betaPrev;
+                if (depth == 0) {
+                    part.d = fr.diffuse / bs.pdf;
+                    part.s = fr.specular / bs.pdf;
+                } else {
+                    Color3 m = fr.total() / bs.pdf;
+                    part.d *= m;
+                    part.s *= m;
+                }
+                addPathRadiance(out, part, Le * w, depth == 0 ? 0.f : clamp);
+            }
             break;
         }
         if (depth >= maxDepth_) break;

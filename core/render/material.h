@@ -1,5 +1,5 @@
-// Material interface between the renderer and whatever builds BSDFs (interim built-in materials now,
-// compiled node graphs later): given a shading point, fill a Closure allocated in a scratch arena.
+// Material interface between the renderer and whatever builds BSDFs (compiled node graphs): given a const
+// shading point, one shading pass fills a Closure (lobes in a scratch arena) and the emitted radiance.
 #pragma once
 
 #include "core/render/bsdf.h"
@@ -12,10 +12,9 @@ namespace specula {
 class Material {
 public:
     virtual ~Material() = default;
-    // Builds the closure at sp. May perturb sp.frame (normal mapping); lobes are allocated in arena.
-    virtual void shade(ShadingPoint& sp, ScratchArena& arena, Closure& out) const = 0;
-    // Emitted radiance towards sp.wo (emissive surfaces). Default: none.
-    virtual Color3 emission(const ShadingPoint& sp) const { return Color3(0.f); }
+    // Builds the closure at sp (lobes allocated in arena, each with its own frame) and, if 'emission' is given,
+    // the radiance emitted towards sp.wo, in the same pass.
+    virtual void shade(const ShadingPoint& sp, ScratchArena& arena, Closure& out, Color3* emission = nullptr) const = 0;
     virtual bool isEmissive() const { return false; }
     const std::string& name() const { return name_; }
     void setName(std::string n) { name_ = std::move(n); }

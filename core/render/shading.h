@@ -5,7 +5,6 @@
 #include "core/math/math.h"
 
 #include <cstdint>
-#include <limits>
 
 namespace specula {
 
@@ -19,7 +18,7 @@ struct ShadingPoint {
     Vec3 dpdu{1, 0, 0}, dpdv{0, 1, 0};  // position partials (world)
     Vec3 dndu{0.f}, dndv{0.f};          // shading-normal partials (world)
     Vec4 tangent{1, 0, 0, 1};           // mesh tangent (xyz world, w = bitangent sign); from dpdu if absent
-    Frame frame;                        // shading frame: n, tangent along dpdu; materials may perturb it
+    Frame frame;                        // geometric shading frame: n, tangent along dpdu (each lobe has its own)
 
     Vec3 wo{0, 0, 1};      // direction towards the viewer / previous vertex (world, unit)
 
@@ -30,10 +29,6 @@ struct ShadingPoint {
     Vec3 dndx{0.f}, dndy{0.f};
     Vec3 dwodx{0.f}, dwody{0.f};  // derivative of wo (world)
 
-    // Distance to the light sample being evaluated: set by the integrator's next-event estimation for delta (point,
-    // spot) lights before Closure::eval, +inf otherwise (directional, environment, area lights, BSDF-sampled
-    // directions), so lobes filtered by half-vector derivatives can differentiate wi (filtered-ggx.md §5.1).
-    float lightDistance = std::numeric_limits<float>::infinity();
     // Render setting "derivatives": "quad" (filtered-ggx.md §5.2): this pixel's partners in its aligned 2×2 quad along
     // screen x ([0]) and y ([1]), shaded at their own pixel centres; the differentials above then hold the fine
     // one-sided differences sign·(neighbour − this).
@@ -41,7 +36,7 @@ struct ShadingPoint {
         bool valid = false;
         float sign = 1.f;  // +1 if this pixel is the quad's x0 (y0): Δ = q(neighbour) − q(this); −1 otherwise
         Vec3 p{0.f}, wo{0.f};
-        Frame frame;       // its shading frame after its material ran (normal maps included)
+        Frame frame;       // the dominant lobe's frame of its closure (normal maps included)
     };
     QuadNeighbour quad[2];
 

@@ -139,7 +139,7 @@ Vec3 falseColour(float t) {
     return glm::clamp(c0 + t * (c1 + t * (c2 + t * (c3 + t * (c4 + t * (c5 + t * c6))))), Vec3(0.f), Vec3(1.f));
 }
 
-// The first GGX lobe of a closure (looking through FramedLobe is not possible: report none).
+// The first GGX lobe of a closure, if any.
 const GgxLobe* findGgx(const Closure& c) {
     for (int i = 0; i < c.size(); ++i)
         if (auto* g = dynamic_cast<const GgxLobe*>(c.lobe(i))) return g;
@@ -192,10 +192,12 @@ void addGraphCommands(CLI::App& app, int& exitCode) {
             ScratchArena arena;
             Closure cl;
             mi.material->shade(sp, arena, cl);
-            Vec3 lo = sp.frame.toLocal(wo), li = sp.frame.toLocal(wi);
-            Color3 f = cl.eval(lo, li).total();
-            float pdf = cl.pdf(lo, li);
-            json j = {{"f", {f.x, f.y, f.z}}, {"pdf", pdf}};
+            BsdfQuery q;
+            q.wo = wo;
+            q.wi = wi;
+            BsdfValue v = cl.evalPdf(q);
+            Color3 f = v.f.total();
+            json j = {{"f", {f.x, f.y, f.z}}, {"pdf", v.pdf}};
             std::printf("%s\n", j.dump().c_str());
         });
     });
@@ -227,13 +229,15 @@ void addGraphCommands(CLI::App& app, int& exitCode) {
             float lobeMax = 0.f, ndfMax = 0.f;
             const GgxLobe* g = findGgx(cl);
             float range = g ? std::clamp(3.f * std::max(g->alphaX(), g->alphaY()), 0.05f, 4.f) : 1.f;
-            Vec3 lwo = sp.frame.toLocal(wo);
             for (int y = 0; y < S; ++y)
                 for (int x = 0; x < S; ++x) {
                     float u = (x + 0.5f) / S * 2.f - 1.f, v = 1.f - (y + 0.5f) / S * 2.f;
                     if (u * u + v * v < 1.f) {  // projected hemisphere: wi = (u, v, sqrt(1 - u² - v²))
                         Vec3 wi(u, v, std::sqrt(1.f - u * u - v * v));
-                        float val = luminance(cl.eval(lwo, sp.frame.toLocal(sp.frame.toWorld(wi))).total());
+                        BsdfQuery q;
+                        q.wo = wo;
+                        q.wi = wi;
+                        float val = luminance(cl.evalPdf(q).f.total());
                         lobe[size_t(y) * S + x] = val;
                         lobeMax = std::max(lobeMax, val);
                     }

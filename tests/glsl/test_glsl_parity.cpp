@@ -5,9 +5,11 @@
 // material module end to end (uniform block, bindings, specula_eval) and dFdx-based derivatives.
 #define GL_GLEXT_PROTOTYPES 1
 #include "core/codegen/glsl_emitter.h"
+#include "tests/unit/test_support.h"
 #include "core/codegen/glsl_sources.h"
 #include "core/color/color_config.h"
 #include "core/graph/graph_material.h"
+#include "tests/unit/test_support.h"
 #include "core/texture/lean_moments.h"
 #include "core/texture/texture_store.h"
 #include "glsl_harness.h"
@@ -355,7 +357,7 @@ ParityResult runParity(const NodeSpec& s, std::string* failure) {
         std::vector<float> cpu;
         for (size_t k = 0; k < s.outputs.size(); ++k) {
             if (s.outputs[k].type == TypeDesc::Closure) {
-                Color3 f = cl.eval(sp.frame.toLocal(wo), sp.frame.toLocal(wi)).total();
+                Color3 f = test::query(cl, wo, wi).f.total();
                 cpu.insert(cpu.end(), {f.x, f.y, f.z, em.x, em.y, em.z});
             } else {
                 for (int c = 0; c < typeWidth(s.outputs[k].type); ++c) cpu.push_back(r[prog.rootRegister(k) + c]);
@@ -498,9 +500,9 @@ void main() {
         Vec3 wo(d[12], d[13], d[14]), wi(d[15], d[16], d[17]);
         sp.wo = wo;
         Closure cl;
-        mat->shade(sp, arena, cl);
-        Color3 f = cl.eval(sp.frame.toLocal(wo), sp.frame.toLocal(wi)).total();
-        Color3 em = mat->emission(sp);
+        Color3 em(0.f);
+        mat->shade(sp, arena, cl, &em);
+        Color3 f = test::query(cl, wo, wi).f.total();
         arena.reset();
         for (int c = 0; c < 3; ++c) {
             float e1 = std::abs(gpu[size_t(j) * 8 + c] - f[c]) / std::max(std::abs(f[c]), kRelFloor);

@@ -381,12 +381,11 @@ struct LobeCase {
     Kernel kernel;
     double diffScale;
 };
-FilteredGgxLobe makeLobe(const LobeCase& c, const D3& wo, const float* lightDist) {
+FilteredGgxLobe makeLobe(const LobeCase& c, const D3& wo) {
     LobeSetup s;
     s.A = c.A;
     s.params = params(c.filter, c.kernel);
     s.diff = randDiff(c.diffScale);
-    s.lightDistance = lightDist;
     FilteredGgxLobe lobe(s, Fresnel::schlick(Color3(0.5f)));
     lobe.setSamplingFromMirror(wo);
     return lobe;
@@ -411,7 +410,7 @@ TEST(FilteredGgxSampling, PdfMatchesSamplerAndEstimatorsAgree) {
         for (double thetaDeg : {20.0, 60.0, 80.0}) {
             double th = thetaDeg * kPiD / 180;
             D3 wo(std::sin(th) * 0.8, std::sin(th) * 0.6, std::cos(th));
-            FilteredGgxLobe lobe = makeLobe(c, wo, &lightDist);
+            FilteredGgxLobe lobe = makeLobe(c, wo);
             Vec3 wof(wo);
             // (1) pdf over the sphere (product rule, z = cos θ, fine near the lobe via many nodes).
             const int NB = 8;  // 8×8 bins in (cos θ, φ)
@@ -437,7 +436,7 @@ TEST(FilteredGgxSampling, PdfMatchesSamplerAndEstimatorsAgree) {
                 if (lobe.sample(wof, r.next2(), wi)) {
                     ++accepted;
                     float p = lobe.pdf(wof, wi);
-                    double v = p > 0 ? lobe.eval(wof, wi).x / p : 0.0;
+                    double v = p > 0 ? lobe.evalPdf(LobeQuery{wof, wi, lightDist}).f.x / p : 0.0;
                     isSum += v, isSum2 += v * v;
                     double z = std::min(std::max(double(wi.z), 0.0), 1 - 1e-12);
                     double phi = std::atan2(double(wi.y), double(wi.x));
@@ -449,7 +448,7 @@ TEST(FilteredGgxSampling, PdfMatchesSamplerAndEstimatorsAgree) {
                 Vec2 u = r.next2();
                 double rr = std::sqrt(u.x), ph = 2 * kPiD * u.y;
                 Vec3 wc(float(rr * std::cos(ph)), float(rr * std::sin(ph)), float(std::sqrt(std::max(0.0, 1.0 - u.x))));
-                double v = wc.z > 0 ? lobe.eval(wof, wc).x * kPiD / wc.z : 0.0;
+                double v = wc.z > 0 ? lobe.evalPdf(LobeQuery{wof, wc, lightDist}).f.x * kPiD / wc.z : 0.0;
                 cosSum += v, cosSum2 += v * v;
             }
             double acc = double(accepted) / N;

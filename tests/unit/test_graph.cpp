@@ -1,6 +1,7 @@
 // Graph core: registry completeness (drift guard), compiler (folding, pruning, topological order),
 // CPU evaluator and loadGraphMaterial against closed forms and direct lobe calls.
 #include "core/graph/graph_material.h"
+#include "tests/unit/test_support.h"
 #include "core/graph/node_spec.h"
 #include "core/render/lobes/fresnel.h"
 #include "core/render/lobes/ggx.h"
@@ -106,10 +107,10 @@ TEST(GraphMaterial, DiffuseMatchesClosedForm) {
     Closure cl;
     mat->shade(sp, arena, cl);
     Vec3 wo = glm::normalize(Vec3(0.1f, 0.2f, 0.9f)), wi = glm::normalize(Vec3(-0.4f, 0.1f, 0.7f));
-    BsdfEval e = cl.eval(wo, wi);
+    BsdfEval e = test::query(cl, wo, wi).f;
     EXPECT_NEAR(e.diffuse.x, 0.2f / kPi * wi.z, 1e-7f);
     EXPECT_NEAR(e.diffuse.z, 0.6f / kPi * wi.z, 1e-7f);
-    EXPECT_NEAR(cl.pdf(wo, wi), wi.z / kPi, 1e-7f);
+    EXPECT_NEAR(test::query(cl, wo, wi).pdf, wi.z / kPi, 1e-7f);
     EXPECT_FALSE(mat->isEmissive());
 }
 
@@ -128,9 +129,9 @@ TEST(GraphMaterial, GgxMatchesDirectLobe) {
     for (int k = 0; k < 20; ++k) {
         Vec3 wo = glm::normalize(Vec3(0.1f * k - 1.f, 0.3f, 1.f)), wi = glm::normalize(Vec3(0.5f, -0.05f * k, 0.8f));
         Color3 ref = direct.eval(wo, wi) * Color3(1.f, 0.5f, 1.f);
-        Color3 got = cl.eval(wo, wi).specular;
+        Color3 got = test::query(cl, wo, wi).f.specular;
         for (int c = 0; c < 3; ++c) EXPECT_NEAR(got[c], ref[c], 1e-6f * std::max(1.f, ref[c]));
-        EXPECT_NEAR(cl.pdf(wo, wi), direct.pdf(wo, wi), 1e-6f * std::max(1.f, direct.pdf(wo, wi)));
+        EXPECT_NEAR(test::query(cl, wo, wi).pdf, direct.pdf(wo, wi), 1e-6f * std::max(1.f, direct.pdf(wo, wi)));
     }
 }
 
@@ -143,7 +144,7 @@ TEST(GraphMaterial, GgxFresnelModes) {
         ScratchArena arena;
         Closure cl;
         mat->shade(sp, arena, cl);
-        return cl.eval(w, w).specular;
+        return test::query(cl, w, w).f.specular;
     };
     Color3 none = evalMode({{"roughness", 0.5}, {"fresnel", "none"}});
     Color3 diel = evalMode({{"roughness", 0.5}, {"fresnel", "dielectric"}, {"ior", 1.5}});
@@ -169,10 +170,12 @@ TEST(GraphMaterial, ClosureAddMixAndEmission) {
     ASSERT_EQ(cl.size(), 2);
     Vec3 wo = glm::normalize(Vec3(0.2f, 0.1f, 1.f)), wi = glm::normalize(Vec3(-0.3f, 0.f, 1.f));
     GgxLobe g(0.09f, 0.09f, Fresnel::schlick(Color3(0.04f)));
-    BsdfEval e = cl.eval(wo, wi);
+    BsdfEval e = test::query(cl, wo, wi).f;
     EXPECT_NEAR(e.diffuse.x, 0.75f * 0.5f / kPi * wi.z, 1e-7f);
     EXPECT_NEAR(e.specular.x, 0.25f * g.eval(wo, wi).x, 1e-6f);
-    Color3 em = mat->emission(sp);
+    Color3 em(0.f);
+    Closure cl2;
+    mat->shade(sp, arena, cl2, &em);
     EXPECT_FLOAT_EQ(em.x, 4.f);
     EXPECT_FLOAT_EQ(em.y, 2.f);
     EXPECT_FLOAT_EQ(em.z, 1.f);
@@ -189,23 +192,25 @@ TEST(GraphMaterial, NormalMapPerturbsShadingFrame) {
     Closure cl;
     mat->shade(sp, arena, cl);
     Vec3 nExp = glm::normalize(Vec3(1, 0, 1));
-    EXPECT_NEAR(sp.frame.n.x, nExp.x, 1e-6f);
-    EXPECT_NEAR(sp.frame.n.z, nExp.z, 1e-6f);
+    ASSERT_EQ(cl.size(), 1);
+    EXPECT_NEAR(cl.frame(0).n.x, nExp.x, 1e-6f);
+    EXPECT_NEAR(cl.frame(0).n.z, nExp.z, 1e-6f);
     // wi along the perturbed normal in world space: f·cos = 1/π
     Vec3 wiW = nExp, woW = nExp;
-    EXPECT_NEAR(cl.eval(sp.frame.toLocal(woW), sp.frame.toLocal(wiW)).diffuse.x, 1.f / kPi, 1e-6f);
+    EXPECT_NEAR(test::query(cl, woW, wiW).f.diffuse.x, 1.f / kPi, 1e-6f);
     // DirectX convention flips green: a texel tilted towards +y in OpenGL tilts towards -y.
     json nodes2 = {{"nm", {{"type", "texture.normal_map"}, {"inputs", {{"color", {0.5, c, c}}, {"convention", "directx"}}}}},
                    {"d", {{"type", "bsdf.diffuse"}, {"inputs", {{"normal", "@nm.normal"}}}}}};
     auto mat2 = load({{"nodes", nodes2}, {"output", "@d.bsdf"}});
     ShadingPoint sp2 = makeSp();
     mat2->shade(sp2, arena, cl);
-    EXPECT_NEAR(sp2.frame.n.y, -1.f / std::sqrt(2.f), 1e-6f);
+    ASSERT_EQ(cl.size(), 1);
+    EXPECT_NEAR(cl.frame(0).n.y, -1.f / std::sqrt(2.f), 1e-6f);
 }
 
 TEST(GraphMaterial, LobesInDifferentFramesAreRotated) {
-    // Diffuse with the geometric normal, GGX with a tilted normal: the GGX lobe is wrapped so that
-    // evaluating in the material frame equals evaluating the lobe in its own frame.
+    // Diffuse with the geometric normal, GGX with a tilted normal: each lobe keeps its own frame, so a world-space
+    // query equals evaluating each lobe in its own frame.
     Vec3 tilted = glm::normalize(Vec3(0.3f, 0.f, 1.f));
     json nodes = {{"d", {{"type", "bsdf.diffuse"}, {"inputs", {{"color", 0.5}}}}},
                   {"g", {{"type", "bsdf.ggx"}, {"inputs", {{"roughness", 0.5}, {"normal", {tilted.x, tilted.y, tilted.z}}}}}},
@@ -219,13 +224,26 @@ TEST(GraphMaterial, LobesInDifferentFramesAreRotated) {
     GgxLobe g(0.25f, 0.25f, Fresnel::schlick(Color3(0.04f)));
     Vec3 woW = glm::normalize(Vec3(0.5f, 0.2f, 1.f)), wiW = glm::normalize(Vec3(-0.1f, -0.3f, 1.f));
     float ref = g.eval(gf.toLocal(woW), gf.toLocal(wiW)).x;
-    EXPECT_NEAR(cl.eval(sp.frame.toLocal(woW), sp.frame.toLocal(wiW)).specular.x, ref, 1e-5f * std::max(1.f, ref));
-    EXPECT_NEAR(cl.pdf(sp.frame.toLocal(woW), sp.frame.toLocal(wiW)),
-                0.f + 0.f, 1e9f);  // finite
-    // sampling returns directions consistent with eval
-    BsdfSample bs;
-    ASSERT_TRUE(cl.sample(sp.frame.toLocal(woW), 0.9f, Vec2(0.3f, 0.6f), bs));
-    EXPECT_GT(bs.pdf, 0.f);
+    EXPECT_NEAR(test::query(cl, woW, wiW).f.specular.x, ref, 1e-5f * std::max(1.f, ref));
+    // Mixture pdf: selection weights luminance(weight·albedo) of each lobe in its own frame.
+    LambertLobe d(Color3(0.5f));
+    float wd = luminance(d.albedo(woW)), wg = luminance(g.albedo(gf.toLocal(woW)));
+    float pdfRef = wd / (wd + wg) * d.pdf(woW, wiW) + wg / (wd + wg) * g.pdf(gf.toLocal(woW), gf.toLocal(wiW));
+    EXPECT_NEAR(test::query(cl, woW, wiW).pdf, pdfRef, 1e-5f * pdfRef);
+    // Sampling returns world directions whose f and pdf are those of a query.
+    for (float uLobe : {0.1f, 0.97f}) {
+        BsdfSample bs;
+        ASSERT_TRUE(test::sample(cl, woW, uLobe, Vec2(0.3f, 0.6f), bs));
+        BsdfValue v = test::query(cl, woW, bs.wi);
+        EXPECT_NEAR(bs.pdf, v.pdf, 1e-5f * v.pdf);
+        EXPECT_NEAR(bs.f.total().x, v.f.total().x, 1e-5f * std::max(1e-3f, v.f.total().x));
+        EXPECT_EQ(bs.kind, uLobe < 0.5f ? LobeKind::Diffuse : LobeKind::Specular);
+    }
+    // A lobe mask selects which lobes answer; the pdf stays the whole mixture's.
+    BsdfValue onlyD = test::query(cl, woW, wiW, std::numeric_limits<float>::infinity(), 1u);
+    EXPECT_EQ(onlyD.f.specular.x, 0.f);
+    EXPECT_GT(onlyD.f.diffuse.x, 0.f);
+    EXPECT_FLOAT_EQ(onlyD.pdf, test::query(cl, woW, wiW).pdf);
 }
 
 TEST(GraphNodes, GeometryAndBindings) {

@@ -1,9 +1,28 @@
 // Helpers shared by the unit tests: temporary directories, running the CLI, reading files.
 #pragma once
 
+#include "core/render/bsdf.h"
+
+#include <limits>
 #include <string>
 
 namespace specula::test {
+
+// A direction query of a closure (world-space wo, wi), as the integrator asks it.
+inline BsdfValue query(const Closure& c, const Vec3& wo, const Vec3& wi,
+                       float lightDistance = std::numeric_limits<float>::infinity(), LobeMask lobes = kAllLobes) {
+    BsdfQuery q;
+    q.wo = wo;
+    q.wi = wi;
+    q.lightDistance = lightDistance;
+    q.lobes = lobes;
+    return c.evalPdf(q);
+}
+inline bool sample(const Closure& c, const Vec3& wo, float uLobe, const Vec2& u, BsdfSample& out) {
+    BsdfQuery q;
+    q.wo = wo;
+    return c.sample(q, uLobe, u, out);
+}
 
 // A fresh empty directory under the system temp dir, removed at process exit.
 std::string tempDir(const std::string& tag);

@@ -68,30 +68,27 @@ public:
         : ax_(std::max(alphaX, ggx::kMinAlpha)), ay_(std::max(alphaY, ggx::kMinAlpha)), fresnel_(fresnel), tint_(tint) {}
 
     LobeKind kind() const override { return LobeKind::Specular; }
+    using BsdfLobe::sample;
 
-    // f·cos = F(wo·h) D(h) G2(wo,wi) / (4 wo.z)
-    Color3 eval(const Vec3& wo, const Vec3& wi) const override {
-        if (wo.z <= 0.f || wi.z <= 0.f) return Color3(0.f);
+    // f·cos = F(wo·h) D(h) G2(wo,wi) / (4 wo.z); pdf = D_wo(h) / (4 wo·h)
+    LobeValue evalPdf(const LobeQuery& q) const override {
+        const Vec3& wo = q.wo;
+        const Vec3& wi = q.wi;
+        if (wo.z <= 0.f || wi.z <= 0.f) return {};
         Vec3 h = wo + wi;
         float len = glm::length(h);
-        if (len == 0.f) return Color3(0.f);
+        if (len == 0.f) return {};
         h /= len;
         float d = ggx::ndf(h, ax_, ay_);
         float g = ggx::g2(wo, wi, ax_, ay_);
-        return tint_ * fresnel_.eval(glm::dot(wo, h)) * (d * g / (4.f * wo.z));
-    }
-    // pdf = D_wo(h) / (4 wo·h)
-    float pdf(const Vec3& wo, const Vec3& wi) const override {
-        if (wo.z <= 0.f || wi.z <= 0.f) return 0.f;
-        Vec3 h = wo + wi;
-        float len = glm::length(h);
-        if (len == 0.f) return 0.f;
-        h /= len;
+        LobeValue v;
+        v.f = tint_ * fresnel_.eval(glm::dot(wo, h)) * (d * g / (4.f * wo.z));
         float woh = glm::dot(wo, h);
-        if (woh <= 0.f) return 0.f;
-        return ggx::visibleNdf(wo, h, ax_, ay_) / (4.f * woh);
+        if (woh > 0.f) v.pdf = ggx::visibleNdf(wo, h, ax_, ay_) / (4.f * woh);
+        return v;
     }
-    bool sample(const Vec3& wo, const Vec2& u, Vec3& wi) const override {
+    bool sample(const LobeQuery& q, const Vec2& u, Vec3& wi) const override {
+        const Vec3& wo = q.wo;
         if (wo.z <= 0.f) return false;
         Vec3 h = ggx::sampleVisibleNormal(wo, u, ax_, ay_);
         wi = ggx::reflect(wo, h);

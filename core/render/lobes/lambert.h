@@ -10,15 +10,14 @@ class LambertLobe final : public BsdfLobe {
 public:
     explicit LambertLobe(const Color3& albedo) : albedo_(albedo) {}
     LobeKind kind() const override { return LobeKind::Diffuse; }
-    Color3 eval(const Vec3& wo, const Vec3& wi) const override {
-        if (wo.z <= 0.f || wi.z <= 0.f) return Color3(0.f);
-        return albedo_ * (kInvPi * wi.z);
+    using BsdfLobe::sample;
+    // f·cos = albedo cos θi / π, pdf = cos θi / π.
+    LobeValue evalPdf(const LobeQuery& q) const override {
+        if (q.wo.z <= 0.f || q.wi.z <= 0.f) return {};
+        return {albedo_ * (kInvPi * q.wi.z), q.wi.z * kInvPi};
     }
-    float pdf(const Vec3& wo, const Vec3& wi) const override {
-        return (wo.z > 0.f && wi.z > 0.f) ? wi.z * kInvPi : 0.f;
-    }
-    bool sample(const Vec3& wo, const Vec2& u, Vec3& wi) const override {
-        if (wo.z <= 0.f) return false;
+    bool sample(const LobeQuery& q, const Vec2& u, Vec3& wi) const override {
+        if (q.wo.z <= 0.f) return false;
         wi = sampleCosineHemisphere(u);
         return wi.z > 0.f;
     }

@@ -104,25 +104,29 @@ class BeckmannLeanLobe final : public BsdfLobe {
 public:
     BeckmannLeanLobe(const lean::SlopeGaussian& g, const Fresnel& fresnel) : g_(g), fresnel_(fresnel) {}
     LobeKind kind() const override { return LobeKind::Specular; }
+    using BsdfLobe::sample;
 
-    Color3 eval(const Vec3& wo, const Vec3& wi) const override {
-        Vec3 h;
-        float v = lean::evalNoFresnel(g_, wo, wi, &h);
-        if (v == 0.f) return Color3(0.f);
-        return fresnel_.eval(glm::dot(wo, h)) * v;
-    }
-    // Slope-space sampling of the Gaussian: pdf_h(h) = D(h) hz, pdf_wi = D(h) hz / (4 wo·h).
-    float pdf(const Vec3& wo, const Vec3& wi) const override {
-        if (wo.z <= 0.f || wi.z <= 0.f) return 0.f;
+    // f·cos as lean::evalNoFresnel times F(wo·h). Slope-space sampling of the Gaussian: pdf_h(h) = D(h) hz,
+    // pdf_wi = D(h) hz / (4 wo·h).
+    LobeValue evalPdf(const LobeQuery& q) const override {
+        const Vec3& wo = q.wo;
+        const Vec3& wi = q.wi;
+        LobeValue r;
+        Vec3 hf;
+        float v = lean::evalNoFresnel(g_, wo, wi, &hf);
+        if (v != 0.f) r.f = fresnel_.eval(glm::dot(wo, hf)) * v;
+        if (wo.z <= 0.f || wi.z <= 0.f) return r;
         Vec3 h = wo + wi;
         float len = std::sqrt(glm::dot(h, h));
-        if (len == 0.f) return 0.f;
+        if (len == 0.f) return r;
         h /= len;
         float woh = glm::dot(wo, h);
-        if (woh <= 0.f) return 0.f;
-        return lean::ndf(g_, h) * h.z / (4.f * woh);
+        if (woh <= 0.f) return r;
+        r.pdf = lean::ndf(g_, h) * h.z / (4.f * woh);
+        return r;
     }
-    bool sample(const Vec3& wo, const Vec2& u, Vec3& wi) const override {
+    bool sample(const LobeQuery& q, const Vec2& u, Vec3& wi) const override {
+        const Vec3& wo = q.wo;
         if (wo.z <= 0.f) return false;
         // Box-Muller, then s = μ + L z with the Cholesky factor L of Σ.
         float r = std::sqrt(-2.f * std::log(std::max(1.f - u.x, 1e-30f)));

@@ -301,7 +301,6 @@ struct LobeSetup {
     Differentials diff;               // analytic derivatives (spec §5.1)
     bool quad = false;                // use quad neighbours (spec §5.2) where valid, analytic otherwise
     QuadNeighbour nb[2];
-    const float* lightDistance = nullptr;  // distance of the current light sample (inf / null: directional)
 };
 
 // GGX reflection with a filtered roughness matrix Ā(wo, wi). eval returns f·cos = F(wo·h) D_Ā(h) G2_Ā(wo, wi)/(4 wo_z).
@@ -329,6 +328,7 @@ public:
     }
 
     LobeKind kind() const override { return LobeKind::Specular; }
+    using BsdfLobe::sample;
 
     // Ā for (wo, wi) (spec §3): the filtered matrix the NDF and G2 use.
     // useQuad = false: analytic derivatives only (the sampling matrix).
@@ -346,34 +346,27 @@ public:
         return filterAdditive(s_.A, dq[0], dq[1], s_.params);
     }
 
-    Color3 eval(const Vec3& wof, const Vec3& wif) const override {
-        if (wof.z <= 0.f || wif.z <= 0.f) return Color3(0.f);
-        D3 wo(wof), wi(wif);
+    // f·cos = F(wo·h) D_Ā(h) G2_Ā(wo, wi) / (4 wo_z); pdf = D_wo(h; Ā_s) / (4 wo·h).
+    LobeValue evalPdf(const LobeQuery& q) const override {
+        if (q.wo.z <= 0.f || q.wi.z <= 0.f) return {};
+        D3 wo(q.wo), wi(q.wi);
         D3 H = wo + wi;
         double len = glm::length(H);
-        if (len == 0.0) return Color3(0.f);
+        if (len == 0.0) return {};
         D3 h = H / len;
-        Sym2 Ab = filtered(wo, wi, invLightDistance());
+        LobeValue r;
+        Sym2 Ab = filtered(wo, wi, invLightDistance(q.lightDistance));
         double d = ndf(h, Ab, tau_);
         double g = g2(wo, wi, Ab);
         float v = float(d * g / (4.0 * wo.z));
-        return tint_ * fresnel_.eval(float(glm::dot(wo, h))) * v;
-    }
-    // pdf = D_wo(h; Ā_s) / (4 wo·h)
-    float pdf(const Vec3& wof, const Vec3& wif) const override {
-        if (wof.z <= 0.f || wif.z <= 0.f) return 0.f;
-        D3 wo(wof), wi(wif);
-        D3 H = wo + wi;
-        double len = glm::length(H);
-        if (len == 0.0) return 0.f;
-        D3 h = H / len;
+        r.f = tint_ * fresnel_.eval(float(glm::dot(wo, h))) * v;
         double woh = glm::dot(wo, h);
-        if (woh <= 0.0) return 0.f;
-        return float(visibleNdf(wo, h, sampling_, tau_) / (4.0 * woh));
+        if (woh > 0.0) r.pdf = float(visibleNdf(wo, h, sampling_, tau_) / (4.0 * woh));
+        return r;
     }
-    bool sample(const Vec3& wof, const Vec2& u, Vec3& wi) const override {
-        if (wof.z <= 0.f) return false;
-        D3 wo(wof);
+    bool sample(const LobeQuery& q, const Vec2& u, Vec3& wi) const override {
+        if (q.wo.z <= 0.f) return false;
+        D3 wo(q.wo);
         D3 m = sampleVisibleNormal(wo, u, samplingL_);
         D3 r = 2.0 * glm::dot(wo, m) * m - wo;
         wi = Vec3(r);
@@ -393,9 +386,7 @@ public:
     }
 
 private:
-    double invLightDistance() const {
-        if (!s_.lightDistance) return 0.0;
-        float dist = *s_.lightDistance;
+    static double invLightDistance(float dist) {
         return (std::isfinite(dist) && dist > 0.f) ? 1.0 / double(dist) : 0.0;
     }
     LobeSetup s_;

@@ -60,7 +60,6 @@ void cpu(EvalContext& c, const Instr& i) {
             nb.t = loc(q.frame.t), nb.b = loc(q.frame.b), nb.n = loc(q.frame.n);
         }
     }
-    if (sp) s.lightDistance = &sp->lightDistance;
     Vec3 f0 = inV3(c, i, kF0);
     auto* lobe = c.arena->make<FilteredGgxLobe>(s, Fresnel::schlick(f0));
     if (sp) lobe->setSamplingFromMirror(loc(sp->wo));

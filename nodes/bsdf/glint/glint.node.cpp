@@ -4,7 +4,7 @@
 // GGAA derivatives: with quad neighbours (render "derivatives": "quad") the half vector is differenced against the
 // partner pixels in their own normal-mapped frames (as dFdx on a GPU); otherwise dh is formed analytically from the
 // rotation of the BSDF frame (dN/dx on T, B) plus, on the CPU only, dwo/dx and, for point lights, dwi/dx from
-// sp.lightDistance. The GLSL uses the frame rotation only (SpeculaShadingInputs carries no dwo or light distance). Fresnel: Schlick at wo.h with the 'f0' input (f0 = 1 gives the authors' F = 1).
+// the query's light distance. The GLSL uses the frame rotation only (SpeculaShadingInputs carries no dwo or light distance). Fresnel: Schlick at wo.h with the 'f0' input (f0 = 1 gives the authors' F = 1).
 #include "nodes/node_common.h"
 
 #include "core/graph/closure_util.h"
@@ -52,7 +52,6 @@ void cpu(EvalContext& c, const Instr& i) {
         in.diff.dwoy = f.toLocal(sp->dwody);
         in.diff.dpx = f.toLocal(sp->dpdx);
         in.diff.dpy = f.toLocal(sp->dpdy);
-        in.diff.lightDistance = &sp->lightDistance;  // outlives the lobe: both live for one path vertex
         for (int k = 0; k < 2; ++k) {
             const ShadingPoint::QuadNeighbour& q = sp->quad[k];
             if (!q.valid) continue;

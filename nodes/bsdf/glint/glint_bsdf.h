@@ -300,12 +300,11 @@ struct GlintNeighbour {
 // Per-pixel change of the local frame and of wo, from which dh is formed at eval time (C21 §6.1 computes
 // dFdx(h) once per pixel). dn: (t.dN, b.dN), the infinitesimal rotation of the frame; dwo/dp: local change of wo
 // and of the position (CPU only: the GLSL inputs carry neither). wi changes only for delta lights at a finite
-// distance (*lightDistance, set by the integrator); otherwise it is held fixed (directional light).
+// distance (the query's light distance); otherwise it is held fixed (directional light).
 struct GlintDifferentials {
     Vec2 dnx{0.f}, dny{0.f};
     Vec3 dwox{0.f}, dwoy{0.f};
     Vec3 dpx{0.f}, dpy{0.f};
-    const float* lightDistance = nullptr;
     GlintNeighbour nb[2];
 };
 
@@ -319,8 +318,7 @@ inline Vec3 halfDerivative(const Vec3& h, float len, const Vec3& dsum) {
 
 // GGAA derivative of the quantity along screen axis k (0 = x, 1 = y).
 inline Vec2 ggaaDerivative(const GlintDifferentials& d, int k, DerivMode mode, const Vec3& wo, const Vec3& wi,
-                           const Vec3& h, float len) {
-    const float dist = d.lightDistance ? *d.lightDistance : std::numeric_limits<float>::infinity();
+                           const Vec3& h, float len, float dist) {
     const bool finite = std::isfinite(dist) && dist > 0.f;
     const GlintNeighbour& nb = d.nb[k];
     if (nb.valid) {
@@ -348,7 +346,8 @@ struct GlintEvalInputs {
     GlintDifferentials diff;
 };
 inline float glintFCosScalar(const Dictionary& dict, const GlintParams& p, const GlintShape& shape,
-                             const GlintEvalInputs& in, const Vec3& wo, const Vec3& wi, Vec3* hOut = nullptr) {
+                             const GlintEvalInputs& in, const Vec3& wo, const Vec3& wi, Vec3* hOut = nullptr,
+                             float lightDistance = std::numeric_limits<float>::infinity()) {
     if (wo.z <= 0.f || wi.z <= 0.f) return 0.f;
     const Vec3 hs = wo + wi;
     const float len = std::sqrt(glm::dot(hs, hs));
@@ -359,8 +358,8 @@ inline float glintFCosScalar(const Dictionary& dict, const GlintParams& p, const
     if (hOut) *hOut = h;
     Vec2 dx(0.f), dy(0.f);
     if (p.ggaa) {
-        dx = ggaaDerivative(in.diff, 0, p.mode, wo, wi, h, len);
-        dy = ggaaDerivative(in.diff, 1, p.mode, wo, wi, h, len);
+        dx = ggaaDerivative(in.diff, 0, p.mode, wo, wi, h, len, lightDistance);
+        dy = ggaaDerivative(in.diff, 1, p.mode, wo, wi, h, len, lightDistance);
     }
     const SdfQuery q = makeQuery(dict, p, shape, h, dx, dy);
     const Footprint fp = footprint(in.duvdx, in.duvdy, p.maxAniso);
@@ -438,14 +437,17 @@ public:
     GlintLobe(const Dictionary& dict, const GlintParams& p, const GlintEvalInputs& in, const Fresnel& fresnel)
         : dict_(dict), p_(p), shape_(GlintShape::make(p.sigmaX, p.sigmaY, p.rho)), in_(in), fresnel_(fresnel) {}
     LobeKind kind() const override { return LobeKind::Specular; }
-    Color3 eval(const Vec3& wo, const Vec3& wi) const override {
+    using BsdfLobe::sample;
+    LobeValue evalPdf(const LobeQuery& q) const override {
+        LobeValue v;
         Vec3 h;
-        const float f = glintFCosScalar(dict_, p_, shape_, in_, wo, wi, &h);
-        if (!(f > 0.f)) return Color3(0.f);
-        return fresnel_.eval(glm::dot(wo, h)) * f;
+        const float f = glintFCosScalar(dict_, p_, shape_, in_, q.wo, q.wi, &h, q.lightDistance);
+        if (f > 0.f) v.f = fresnel_.eval(glm::dot(q.wo, h)) * f;
+        v.pdf = beckmannHalfPdf(shape_, q.wo, q.wi);
+        return v;
     }
-    float pdf(const Vec3& wo, const Vec3& wi) const override { return beckmannHalfPdf(shape_, wo, wi); }
-    bool sample(const Vec3& wo, const Vec2& u, Vec3& wi) const override {
+    bool sample(const LobeQuery& q, const Vec2& u, Vec3& wi) const override {
+        const Vec3& wo = q.wo;
         if (wo.z <= 0.f) return false;
         const Vec3 h = sampleBeckmannHalf(shape_, u);
         const float woh = glm::dot(wo, h);
