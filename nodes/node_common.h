@@ -2,6 +2,7 @@
 // math.add.vec2, math.add.color3, math.add.vector3) and component-wise CPU kernels by width.
 #pragma once
 
+#include "core/graph/node_params.h"
 #include "core/graph/node_spec.h"
 
 #include <string>
@@ -20,9 +21,33 @@ inline const std::vector<TypeDesc>& vectorTypes() {
     return t;
 }
 
-// A port of type t whose default is d in every component, sampled in [lo, hi] by the parity suite.
-inline PortSpec port(std::string name, TypeDesc t, float d, std::string doc, float lo = -2.f, float hi = 2.f) {
-    return std::move(PortSpec::make(std::move(name), t, {d, d, d}, std::move(doc))).range(lo, hi);
+// The canonical port type of a register width (reading lists of width-generic families are built with it).
+template <int W>
+constexpr TypeDesc widthType() {
+    return W == 1 ? TypeDesc::Float : W == 2 ? TypeDesc::Vec2 : TypeDesc::Vector3;
+}
+
+// Default, documentation and soft range of one operand of a width-generic family.
+struct OperandDoc {
+    float def = 0.f;
+    std::string doc;
+    float lo = -2.f, hi = 2.f;
+};
+
+// Writes the value of a node's single output (the typed math families have exactly one).
+template <class T>
+inline void setSingleOutput(EvalContext& c, const Instr& i, const T& v) {
+    set(c, i, OutPort<T>{0}, v);
+}
+
+// Calls F::template ports<W>(t, args...) for the width of t and returns the PortSpecs.
+template <template <int> class Family, class... Args>
+std::vector<PortSpec> portsByWidth(TypeDesc t, const Args&... args) {
+    switch (typeWidth(t)) {
+        case 1: return Family<1>::declare(t, args...).ports();
+        case 2: return Family<2>::declare(t, args...).ports();
+        default: return Family<3>::declare(t, args...).ports();
+    }
 }
 
 // Dispatch a kernel template on the register width of t.
@@ -39,32 +64,30 @@ CpuFn byWidth(TypeDesc t) {
 
 namespace specula::nodes {
 
-// Component-wise kernels: out[k] = Op(a[k], b[k]) / Op(a[k], b[k], c[k]) over the type's width.
+// Binary component-wise families (math.add, sub, mul, div, pow): ports a and b of the family type.
+template <int W>
+struct BinaryArgs {
+    FloatN<W> a, b;
+    static NodeParams<BinaryArgs> declare(TypeDesc t, const OperandDoc& a = {}, const OperandDoc& b = {}) {
+        return NodeParams<BinaryArgs>()
+            .typed("a", &BinaryArgs::a, t, a.def, a.doc).range(a.lo, a.hi)
+            .typed("b", &BinaryArgs::b, t, b.def, b.doc).range(b.lo, b.hi);
+    }
+};
 template <float (*Op)(float, float)>
 struct Binary {
     template <int W>
     struct K {
         static void run(EvalContext& c, const Instr& i) {
-            const float* a = c.r + i.in[0];
-            const float* b = c.r + i.in[1];
-            float* o = c.r + i.out[0];
-            for (int k = 0; k < W; ++k) o[k] = Op(a[k], b[k]);
+            static const NodeParams<BinaryArgs<W>> kIn = BinaryArgs<W>::declare(widthType<W>());
+            const BinaryArgs<W> p = kIn.read(c, i);
+            FloatN<W> o;
+            for (int k = 0; k < W; ++k) o[k] = Op(p.a[k], p.b[k]);
+            setSingleOutput(c, i, o);
         }
     };
 };
-template <float (*Op)(float, float, float)>
-struct Ternary {
-    template <int W>
-    struct K {
-        static void run(EvalContext& c, const Instr& i) {
-            const float* a = c.r + i.in[0];
-            const float* b = c.r + i.in[1];
-            const float* d = c.r + i.in[2];
-            float* o = c.r + i.out[0];
-            for (int k = 0; k < W; ++k) o[k] = Op(a[k], b[k], d[k]);
-        }
-    };
-};
+
 
 // Registers "<family>.<name>.<type>" for every type in 'types'; 'fill' sets ports/cpu per type.
 template <class Fill>

@@ -2,6 +2,7 @@
 // the GLSL prelude does, and add the lobe with that frame to the node's closure.
 #pragma once
 
+#include "core/graph/node_params.h"
 #include "core/graph/node_spec.h"
 #include "core/render/bsdf.h"
 #include "core/render/shading.h"
@@ -16,11 +17,11 @@ inline Frame bsdfFrame(Vec3 n, Vec3 t) {
     return Frame::fromNormalTangent(n, t);
 }
 
-// Adds weight·lobe, built in frame f (world space), to the closure of output port k. Every lobe keeps its own
+// Adds weight·lobe, built in frame f (world space), to the closure of output k. Every lobe keeps its own
 // frame (Closure::add); nothing is written back to the shading point.
-inline void emitLobe(EvalContext& c, const Instr& i, int k, const Frame& f, const Color3& weight,
+inline void emitLobe(EvalContext& c, const Instr& i, OutPort<ClosureRef> k, const Frame& f, const Color3& weight,
                      const BsdfLobe* lobe) {
-    int slot = outClosure(c, i, k);
+    int slot = slotOf(c, i, k);
     Closure& cl = *c.closures[slot];
     cl.clear();
     c.emission[slot] = Color3(0.f);

@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cstdio>
 #include <cstring>
 #include <functional>
 #include <map>
@@ -93,6 +94,30 @@ bool parseNumeric(const json& v, TypeDesc t, std::array<float, 3>& out) {
         return true;
     }
     return false;
+}
+
+std::string numberText(float v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%g", v);
+    return buf;
+}
+
+// A literal outside the port's hard range is an error; outside its soft (documented) range, a warning.
+void checkRange(const PortSpec& p, const NodeSpec& spec, const std::array<float, 3>& v, const std::string& ptr,
+                std::vector<std::string>& warnings) {
+    const int w = typeWidth(p.type);
+    for (int c = 0; c < w; ++c) {
+        const std::string where = w > 1 ? " (component " + std::to_string(c) + ")" : "";
+        if (!(v[c] >= p.hardMin && v[c] <= p.hardMax))
+            throw InputError(ptr, "value " + numberText(v[c]) + where + " of input '" + p.name + "' of " + spec.id +
+                                      " is outside its valid range [" + numberText(p.hardMin) + ", " + numberText(p.hardMax) + "]",
+                             numberText(std::clamp(v[c], p.hardMin, p.hardMax)));
+        if (!(v[c] >= p.minValue && v[c] <= p.maxValue)) {
+            warnings.push_back(ptr + ": value " + numberText(v[c]) + where + " of input '" + p.name + "' of " + spec.id +
+                               " is outside its usual range [" + numberText(p.minValue) + ", " + numberText(p.maxValue) + "]");
+            return;
+        }
+    }
 }
 
 }  // namespace
@@ -220,6 +245,7 @@ GraphDesc parseGraph(const json& mat, const std::string& pointer, const ParseOpt
                                              ", expected " + want + " or \"@node.output\"",
                                      sug.size() > 1 && val.get<std::string>().find('.') != std::string::npos ? sug : "");
                 }
+                checkRange(p, spec, v.value, ip, g.warnings);
                 v.kind = InputValue::Kind::Literal;
             }
         }
@@ -368,6 +394,7 @@ Program Program::compile(const GraphDesc& g, const std::vector<std::pair<int, in
         }
         if (spec.prepare) {
             PrepareContext pc;
+            pc.spec = &spec;
             pc.strings = &strings;
             pc.load = load;
             for (auto& v : n.inputs) pc.pointers.push_back(v.pointer);

@@ -38,6 +38,8 @@ struct GraphDesc {
     std::vector<NodeInstance> nodes;   // sorted by id
     std::vector<int> order;            // topological order (sources first), deterministic
     int outputNode = -1, outputPort = -1;
+    // Literals outside a port's soft range (documented range): "<JSON pointer>: <message>", in node order.
+    std::vector<std::string> warnings;
     int findNode(const std::string& id) const;
     // Nodes reachable from the given (node, port) roots, in topological order (dead nodes pruned).
     std::vector<int> liveOrder(const std::vector<std::pair<int, int>>& roots) const;

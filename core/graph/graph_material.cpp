@@ -11,6 +11,7 @@ void GraphMaterial::shade(const ShadingPoint& sp, ScratchArena& arena, Closure& 
 std::shared_ptr<Material> loadGraphMaterial(const nlohmann::json& material, const std::string& jsonPointer,
                                             const GraphLoadContext& ctx) {
     graph::GraphDesc desc = graph::parseGraph(material, jsonPointer);
+    if (ctx.warnings) ctx.warnings->insert(ctx.warnings->end(), desc.warnings.begin(), desc.warnings.end());
     graph::Program prog = graph::Program::compile(desc, {{desc.outputNode, desc.outputPort}}, &ctx);
     return std::make_shared<GraphMaterial>(std::move(desc), std::move(prog));
 }

@@ -9,6 +9,7 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace specula {
 
@@ -17,6 +18,7 @@ class TextureStore;
 struct GraphLoadContext {
     TextureStore* textures = nullptr;  // image textures are loaded through it (may be null: no textures)
     std::string baseDir;               // relative texture paths are resolved against it
+    std::vector<std::string>* warnings = nullptr;  // where soft-range warnings go (may be null: dropped)
 };
 
 // A Material backed by a compiled node graph.

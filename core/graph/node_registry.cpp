@@ -150,4 +150,20 @@ std::vector<const NodeSpec*> NodeRegistry::all() const {
     return r;
 }
 
+void nodeParamsFatal(const std::string& what) {
+    std::fprintf(stderr, "specula: node declaration error: %s\n", what.c_str());
+    std::abort();
+}
+
+namespace {
+size_t preparePort(const NodeSpec* spec, const std::string& port) {
+    int k = spec ? spec->inputIndex(port) : -1;
+    if (k < 0) nodeParamsFatal("prepare reads unknown port '" + port + "' of " + (spec ? spec->id : std::string("?")));
+    return size_t(k);
+}
+}  // namespace
+
+const std::string& PrepareContext::str(const std::string& port) const { return (*strings)[preparePort(spec, port)]; }
+const std::string& PrepareContext::pointer(const std::string& port) const { return pointers[preparePort(spec, port)]; }
+
 }  // namespace specula::graph

@@ -42,14 +42,23 @@ const char* bindingGlsl(GeomBinding b);
 // Writes the binding's value (typeWidth(bindingType(b)) floats) for a shading point.
 void loadBinding(GeomBinding b, const ShadingPoint& sp, float* dst);
 
+// Value names of a typed enum port and the prefix of its generated GLSL constants (node_params.h, SPECULA_ENUM).
+struct EnumDesc {
+    std::string glslPrefix;           // e.g. "SPC_FRESNEL": constants SPC_FRESNEL_SCHLICK = 0, ...
+    std::vector<std::string> values;  // the first is the default
+};
+
 struct PortSpec {
     std::string name;
     TypeDesc type = TypeDesc::Float;
     std::array<float, 3> def{0.f, 0.f, 0.f};   // numeric default (first typeWidth entries)
     std::string defString;                      // default of a string port ("" + required = must be given)
     std::vector<std::string> enumValues;        // non-empty: string port restricted to these (GLSL gets the index)
+    const EnumDesc* enumDesc = nullptr;         // the typed enum behind enumValues (GLSL constants), if declared
     float minValue = -std::numeric_limits<float>::infinity();  // documented soft range; the parity suite
-    float maxValue = std::numeric_limits<float>::infinity();   // samples inputs inside it
+    float maxValue = std::numeric_limits<float>::infinity();   // samples inputs inside it; a literal outside warns
+    float hardMin = -std::numeric_limits<float>::infinity();   // hard range: a literal outside is an error
+    float hardMax = std::numeric_limits<float>::infinity();
     std::string doc;
     GeomBinding binding = GeomBinding::None;
     bool required = false;  // no default: must be connected (closures) or given (strings)
@@ -102,10 +111,16 @@ struct EvalContext;
 using CpuFn = void (*)(EvalContext& ctx, const Instr& ins);
 
 // Per-instance preparation (string/enum literals -> opaque data such as a texture handle).
+struct NodeSpec;
 struct PrepareContext {
+    const NodeSpec* spec = nullptr;
     const std::vector<std::string>* strings;  // per input port; "" for non-string ports
     const GraphLoadContext* load;             // may be null (e.g. codegen-only use)
     std::vector<std::string> pointers;        // JSON pointer per input port (for errors)
+    // The string literal and the JSON pointer of the input port named 'port' (aborts on an unknown name: a
+    // programming error found by every test).
+    const std::string& str(const std::string& port) const;
+    const std::string& pointer(const std::string& port) const;
 };
 using PrepareFn = std::shared_ptr<const void> (*)(const PrepareContext& ctx);
 
@@ -188,31 +203,5 @@ struct NodeRegistrar {
 // One per node file: SPECULA_REGISTER_NODES(fn) with fn(NodeRegistry&) adding its spec(s).
 #define SPECULA_REGISTER_NODES(fn) \
     static ::specula::graph::NodeRegistrar SPECULA_NODE_CONCAT(specula_node_registrar_, __LINE__)(fn)
-
-// ---- helpers for node CPU code ---------------------------------------------------------------------
-inline float inF(const EvalContext& c, const Instr& i, int k) { return c.r[i.in[k]]; }
-inline Vec2 inV2(const EvalContext& c, const Instr& i, int k) {
-    const float* p = c.r + i.in[k];
-    return {p[0], p[1]};
-}
-inline Vec3 inV3(const EvalContext& c, const Instr& i, int k) {
-    const float* p = c.r + i.in[k];
-    return {p[0], p[1], p[2]};
-}
-inline int inEnum(const Instr& i, int k) { return int(i.in[k]); }
-inline int inClosure(const EvalContext& c, const Instr& i, int k) { return int(c.r[i.in[k]]); }
-inline int outClosure(const EvalContext& c, const Instr& i, int k) { return int(c.r[i.out[k]]); }
-inline void outF(EvalContext& c, const Instr& i, int k, float v) { c.r[i.out[k]] = v; }
-inline void outV2(EvalContext& c, const Instr& i, int k, Vec2 v) {
-    float* p = c.r + i.out[k];
-    p[0] = v.x;
-    p[1] = v.y;
-}
-inline void outV3(EvalContext& c, const Instr& i, int k, Vec3 v) {
-    float* p = c.r + i.out[k];
-    p[0] = v.x;
-    p[1] = v.y;
-    p[2] = v.z;
-}
 
 }  // namespace specula::graph

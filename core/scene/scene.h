@@ -61,6 +61,7 @@ struct ShapeInstance {
 
 struct Scene {
     std::string sourcePath;  // the JSON file, for messages
+    std::vector<std::string> warnings;  // non-fatal findings of the loader ("<JSON pointer>: <message>")
     RenderSettings render;
     ColorSettings color;
     CameraDesc camera;

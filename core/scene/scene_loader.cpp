@@ -168,7 +168,7 @@ void readMaterials(const Json& j, Context& ctx) {
     for (auto it = j.begin(); it != j.end(); ++it) {
         std::string ptr = "/materials/" + pointerEscape(it.key());
         // Every material is a node graph (docs/graph-format.md), compiled once here.
-        auto m = loadGraphMaterial(it.value(), ptr, GraphLoadContext{ctx.scene->textures.get(), ctx.baseDir});
+        auto m = loadGraphMaterial(it.value(), ptr, GraphLoadContext{ctx.scene->textures.get(), ctx.baseDir, &ctx.scene->warnings});
         m->setName(it.key());
         ctx.materials[it.key()] = int(ctx.scene->materials.size());
         ctx.scene->materials.push_back(std::move(m));

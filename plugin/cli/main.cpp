@@ -140,6 +140,7 @@ int main(int argc, char** argv) {
             exitCode = reportError(e, kExitBadInput);
             return;
         }
+        for (const std::string& w : scene.warnings) std::fprintf(stderr, "specula: warning: %s\n", w.c_str());
         std::signal(SIGINT, onSigint);
         std::signal(SIGTERM, onSigint);
         RenderOptions opts;
@@ -216,6 +217,7 @@ int main(int argc, char** argv) {
     info->callback([&] {
         try {
             Scene s = loadScene(infoScene);
+            for (const std::string& w : s.warnings) std::fprintf(stderr, "specula: warning: %s\n", w.c_str());
             std::printf("%s", describeScene(s).c_str());
         } catch (const InputError& e) {
             exitCode = reportError(e, kExitBadInput);

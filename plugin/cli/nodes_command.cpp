@@ -96,11 +96,18 @@ std::string defaultText(const PortSpec& p) {
     return vecText(p);
 }
 
+// The soft (usual) range, then the hard limits a literal must respect, where declared.
 std::string rangeText(const PortSpec& p) {
-    if (hasMin(p) && hasMax(p)) return "[" + num(p.minValue) + ", " + num(p.maxValue) + "]";
-    if (hasMin(p)) return ">= " + num(p.minValue);
-    if (hasMax(p)) return "<= " + num(p.maxValue);
-    return "";
+    std::string r;
+    if (hasMin(p) && hasMax(p)) r = "[" + num(p.minValue) + ", " + num(p.maxValue) + "]";
+    else if (hasMin(p)) r = ">= " + num(p.minValue);
+    else if (hasMax(p)) r = "<= " + num(p.maxValue);
+    const bool lo = std::isfinite(p.hardMin), hi = std::isfinite(p.hardMax);
+    if (lo || hi) {
+        std::string h = lo && hi ? "[" + num(p.hardMin) + ", " + num(p.hardMax) + "]" : lo ? ">= " + num(p.hardMin) : "<= " + num(p.hardMax);
+        r += (r.empty() ? "" : "; ") + std::string("valid ") + h;
+    }
+    return r;
 }
 
 std::string join(const std::vector<std::string>& v, const std::string& sep) {
@@ -402,6 +409,8 @@ ojson portJson(const PortSpec& p, bool input) {
         if (!p.enumValues.empty()) j["enum"] = p.enumValues;
         j["min"] = jsonNum(p.minValue);
         j["max"] = jsonNum(p.maxValue);
+        j["hard_min"] = jsonNum(p.hardMin);
+        j["hard_max"] = jsonNum(p.hardMax);
         j["binding"] = p.binding == GeomBinding::None ? ojson(nullptr) : ojson(bindingName(p.binding));
     }
     j["doc"] = p.doc;

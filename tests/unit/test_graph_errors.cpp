@@ -116,3 +116,26 @@ TEST(GraphErrors, MalformedAndUnknownReferences) {
                                {"output", "@m.bsdf"}});
     EXPECT_EQ(e5.pointer(), "/materials/steel/nodes/m/inputs/a");
 }
+
+TEST(GraphErrors, LiteralOutsideHardRangeIsAnError) {
+    InputError e = loadError({{"nodes", {{"spec", ggx({{"roughness", 1.5}})}}}, {"output", "@spec.bsdf"}});
+    EXPECT_EQ(e.pointer(), "/materials/steel/nodes/spec/inputs/roughness");
+    EXPECT_EQ(e.suggestion(), "1");
+    EXPECT_NE(std::string(e.what()).find("outside its valid range [0, 1]"), std::string::npos) << e.what();
+    // One component of a colour out of range is named.
+    InputError e2 = loadError({{"nodes", {{"spec", ggx({{"f0", {0.5, -0.1, 0.5}}})}}}, {"output", "@spec.bsdf"}});
+    EXPECT_EQ(e2.pointer(), "/materials/steel/nodes/spec/inputs/f0");
+    EXPECT_NE(std::string(e2.what()).find("component 1"), std::string::npos) << e2.what();
+}
+
+TEST(GraphErrors, LiteralOutsideSoftRangeWarns) {
+    std::vector<std::string> warnings;
+    GraphLoadContext ctx;
+    ctx.warnings = &warnings;
+    // weight 2 is valid (hard range [0, 1e6]) but outside the usual [0, 1]; roughness 0.5 is inside both.
+    loadGraphMaterial({{"nodes", {{"spec", ggx({{"weight", 2.0}, {"roughness", 0.5}})}}}, {"output", "@spec.bsdf"}},
+                      "/materials/steel", ctx);
+    ASSERT_EQ(warnings.size(), 1u);
+    EXPECT_EQ(warnings[0].rfind("/materials/steel/nodes/spec/inputs/weight: ", 0), 0u) << warnings[0];
+    EXPECT_NE(warnings[0].find("usual range [0, 1]"), std::string::npos) << warnings[0];
+}

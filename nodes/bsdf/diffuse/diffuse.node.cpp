@@ -6,25 +6,37 @@
 
 namespace specula::nodes {
 namespace {
+
+struct Params {
+    Color3 color;
+    Vec3 normal, tangent;
+};
+const NodeParams<Params> kParams = NodeParams<Params>()
+    .c3("color", &Params::color, Vec3(0.8f), "albedo").range(0.f, 1.f).hard(0.f, 1e6f)
+    .n3("normal", &Params::normal, Vec3(0, 0, 1), "shading normal").bind(GeomBinding::N)
+    .v3("tangent", &Params::tangent, Vec3(1, 0, 0), "tangent (orients the frame)").bind(GeomBinding::T);
+OutputList kOutputs;
+const OutPort<ClosureRef> kBsdf = kOutputs.add<ClosureRef>("bsdf", TypeDesc::Closure, "the diffuse closure");
+
 void cpu(EvalContext& c, const Instr& i) {
-    Frame f = bsdfFrame(inV3(c, i, 1), inV3(c, i, 2));
-    emitLobe(c, i, 0, f, Color3(1.f), c.arena->make<LambertLobe>(inV3(c, i, 0)));
+    const Params p = kParams.read(c, i);
+    emitLobe(c, i, kBsdf, bsdfFrame(p.normal, p.tangent), Color3(1.f), c.arena->make<LambertLobe>(p.color));
 }
+
 void reg(NodeRegistry& r) {
     NodeSpec s;
     s.id = "bsdf.diffuse";
     s.category = "bsdf";
     s.doc = "Lambertian diffuse reflection, f = color/π.";
-    s.inputs = {std::move(PortSpec::c3("color", Vec3(0.8f), "albedo")).range(0.f, 1.f),
-                std::move(PortSpec::n3("normal", Vec3(0, 0, 1), "shading normal")).bind(GeomBinding::N),
-                std::move(PortSpec::v3("tangent", Vec3(1, 0, 0), "tangent (orients the frame)")).bind(GeomBinding::T)};
-    s.outputs = {PortSpec::out("bsdf", TypeDesc::Closure, "the diffuse closure")};
+    s.inputs = kParams.ports();
+    s.outputs = kOutputs.ports();
     s.flags = kGlslDirections;
     s.cpu = &cpu;
     s.glslFunction = "spc_bsdf_diffuse";
     s.glslFile = "bsdf/diffuse/diffuse.glsl";
     r.add(std::move(s));
 }
+
 }  // namespace
 SPECULA_REGISTER_NODES(reg);
 }  // namespace specula::nodes

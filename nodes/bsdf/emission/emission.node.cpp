@@ -1,29 +1,42 @@
-// bsdf.emission: emitted radiance color·strength (Material::emission), no scattering.
+// bsdf.emission: emitted radiance color·strength (returned with the closure by Material::shade), no scattering.
 #include "nodes/node_common.h"
 
 #include "core/render/bsdf.h"
 
 namespace specula::nodes {
 namespace {
+
+struct Params {
+    Color3 color;
+    float strength;
+};
+const NodeParams<Params> kParams = NodeParams<Params>()
+    .c3("color", &Params::color, Vec3(1.f), "emitted colour").range(0.f, 1.f).hard(0.f, 1e30f)
+    .f("strength", &Params::strength, 1.f, "radiance scale").range(0.f, 10.f).hard(0.f, 1e30f);
+OutputList kOutputs;
+const OutPort<ClosureRef> kBsdf = kOutputs.add<ClosureRef>("bsdf", TypeDesc::Closure, "the emission closure");
+
 void cpu(EvalContext& c, const Instr& i) {
-    int slot = outClosure(c, i, 0);
+    const Params p = kParams.read(c, i);
+    int slot = slotOf(c, i, kBsdf);
     c.closures[slot]->clear();
-    c.emission[slot] = inV3(c, i, 0) * inF(c, i, 1);
+    c.emission[slot] = p.color * p.strength;
 }
+
 void reg(NodeRegistry& r) {
     NodeSpec s;
     s.id = "bsdf.emission";
     s.category = "bsdf";
     s.doc = "Emission closure: radiance color·strength (both sides), no scattering.";
-    s.inputs = {std::move(PortSpec::c3("color", Vec3(1.f), "emitted colour")).range(0.f, 1.f),
-                std::move(PortSpec::f("strength", 1.f, "radiance scale")).range(0.f, 10.f)};
-    s.outputs = {PortSpec::out("bsdf", TypeDesc::Closure, "the emission closure")};
+    s.inputs = kParams.ports();
+    s.outputs = kOutputs.ports();
     s.flags = kEmissive;
     s.cpu = &cpu;
     s.glslFunction = "spc_bsdf_emission";
     s.glslFile = "bsdf/emission/emission.glsl";
     r.add(std::move(s));
 }
+
 }  // namespace
 SPECULA_REGISTER_NODES(reg);
 }  // namespace specula::nodes

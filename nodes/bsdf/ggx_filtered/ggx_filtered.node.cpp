@@ -14,7 +14,66 @@ namespace {
 
 using namespace specula::fggx;
 
-enum In { kWeight, kAlpha, kCovariance, kFilter, kKernel, kSigma2, kKappa, kDerivatives, kDerivScale, kF0, kNormal, kTangent };
+// Port order of the enum inputs (the first value is the default); filterOf maps to filtered_ggx.h's Filter.
+enum class FilterChoice : int { ProjectedApprox, None, Slope, Projected, IsoMax, IsoSum, IsoMean, IsoRect };
+enum class KernelChoice : int { AxisAligned, Full };
+enum class DerivativeSource : int { Analytic, Quad };
+
+}  // namespace
+}  // namespace specula::nodes
+
+SPECULA_ENUM(specula::nodes::FilterChoice, "SPC_GGXF_FILTER", "projected_approx", "none", "slope", "projected", "iso_max",
+             "iso_sum", "iso_mean", "iso_rect");
+SPECULA_ENUM(specula::nodes::KernelChoice, "SPC_GGXF_KERNEL", "axis_aligned", "full");
+SPECULA_ENUM(specula::nodes::DerivativeSource, "SPC_DERIVATIVES", "analytic", "quad");
+
+namespace specula::nodes {
+namespace {
+
+struct Params {
+    Color3 weight;
+    Vec2 alpha;
+    Vec3 covariance;
+    FilterChoice filter;
+    KernelChoice kernel;
+    float sigma2, kappa;
+    DerivativeSource derivatives;
+    float derivativeScale;
+    Color3 f0;
+    Vec3 normal, tangent;
+};
+
+const NodeParams<Params> kParams = NodeParams<Params>()
+    .c3("weight", &Params::weight, Vec3(1.f), "tint / layer weight").range(0.f, 1.f).hard(0.f, 1e6f)
+    .v2("alpha", &Params::alpha, Vec2(0.05f), "unfiltered GGX α along tangent (x) and bitangent (y)").range(0.02f, 0.9f).hard(0.f, 1.f)
+    .v3("covariance", &Params::covariance, Vec3(0.f), "slope covariance Σ as (var_x, var_y, cov_xy), added as A + 2Σ (texture.lean covariance)").range(0.f, 0.01f)
+    .choice("filter", &Params::filter, "NDF filter (spec §3): projected_approx = TK21 Eq. 9 (Listing 2 reading (a)); slope = K16 (reading (b))")
+    .choice("kernel", &Params::kernel, "half-vector filters: bounding rectangle with κ clamp, or full Σ")
+    .f("sigma2", &Params::sigma2, float(kDefaultSigma2), "pixel-filter variance σ² (0.25 reproduces K16/TK19)").range(0.05f, 0.5f).hard(0.f, 1e3f)
+    .f("kappa", &Params::kappa, float(kDefaultKappa), "kernel clamp κ (axis-aligned and isotropic filters)").range(0.f, 1.f).hard(0.f, 1e3f)
+    .choice("derivatives", &Params::derivatives, "analytic: ray differentials; quad: 2×2 finite differences (dFdxFine)")
+    .f("derivative_scale", &Params::derivativeScale, 1.f, "multiplies every screen derivative").range(0.f, 2.f).hard(0.f, 1e3f)
+    .c3("f0", &Params::f0, Vec3(0.04f), "Schlick F0 (1 = no Fresnel)").range(0.f, 1.f).hard(0.f, 1.f)
+    .n3("normal", &Params::normal, Vec3(0, 0, 1), "shading normal").bind(GeomBinding::N)
+    .v3("tangent", &Params::tangent, Vec3(1, 0, 0), "tangent: direction of α_x").bind(GeomBinding::T);
+OutputList kOutputs;
+const OutPort<ClosureRef> kBsdf = kOutputs.add<ClosureRef>("bsdf", TypeDesc::Closure, "the specular closure");
+const OutPort<Vec2> kFilteredAlpha =
+    kOutputs.add<Vec2>("filtered_alpha", TypeDesc::Vec2, "sqrt of diag(Ā) at the mirror configuration (debug)");
+
+Filter filterOf(FilterChoice f) {
+    switch (f) {
+        case FilterChoice::ProjectedApprox: return Filter::ProjectedApprox;
+        case FilterChoice::None: return Filter::None;
+        case FilterChoice::Slope: return Filter::Slope;
+        case FilterChoice::Projected: return Filter::Projected;
+        case FilterChoice::IsoMax: return Filter::IsoMax;
+        case FilterChoice::IsoSum: return Filter::IsoSum;
+        case FilterChoice::IsoMean: return Filter::IsoMean;
+        case FilterChoice::IsoRect: return Filter::IsoRect;
+    }
+    return Filter::None;
+}
 
 // A = diag(α_x², α_y²) + 2Σ with Σ made positive semi-definite (|Σ_xy| ≤ sqrt(Σ_xx Σ_yy)); α clamped to
 // [1e-4, 0.999] (the projected variants need α < 1, spec §3.3).
@@ -28,18 +87,16 @@ Sym2 roughnessMatrix(Vec2 alpha, Vec3 cov) {
 }
 
 void cpu(EvalContext& c, const Instr& i) {
+    const Params p = kParams.read(c, i);
     LobeSetup s;
-    s.A = roughnessMatrix(inV2(c, i, kAlpha), inV3(c, i, kCovariance));
-    // Port enum order (default first) -> filtered_ggx.h enums.
-    static const Filter kFilters[] = {Filter::ProjectedApprox, Filter::None,    Filter::Slope,  Filter::Projected,
-                                      Filter::IsoMax,          Filter::IsoSum,  Filter::IsoMean, Filter::IsoRect};
-    s.params.filter = kFilters[inEnum(i, kFilter)];
-    s.params.kernel = inEnum(i, kKernel) == 0 ? Kernel::AxisAligned : Kernel::Full;
-    s.params.sigma2 = std::max(double(inF(c, i, kSigma2)), 0.0);
-    s.params.kappa = std::max(double(inF(c, i, kKappa)), 0.0);
-    const bool quad = inEnum(i, kDerivatives) == 1;
-    const double scale = inF(c, i, kDerivScale);
-    Frame f = bsdfFrame(inV3(c, i, kNormal), inV3(c, i, kTangent));
+    s.A = roughnessMatrix(p.alpha, p.covariance);
+    s.params.filter = filterOf(p.filter);
+    s.params.kernel = p.kernel == KernelChoice::AxisAligned ? Kernel::AxisAligned : Kernel::Full;
+    s.params.sigma2 = std::max(double(p.sigma2), 0.0);
+    s.params.kappa = std::max(double(p.kappa), 0.0);
+    const bool quad = p.derivatives == DerivativeSource::Quad;
+    const double scale = p.derivativeScale;
+    Frame f = bsdfFrame(p.normal, p.tangent);
     auto loc = [&](const Vec3& v) { return D3(f.toLocal(v)); };
     const ShadingPoint* sp = c.sp;
     if (sp && sp->hasDifferentials) {
@@ -60,12 +117,11 @@ void cpu(EvalContext& c, const Instr& i) {
             nb.t = loc(q.frame.t), nb.b = loc(q.frame.b), nb.n = loc(q.frame.n);
         }
     }
-    Vec3 f0 = inV3(c, i, kF0);
-    auto* lobe = c.arena->make<FilteredGgxLobe>(s, Fresnel::schlick(f0));
+    auto* lobe = c.arena->make<FilteredGgxLobe>(s, Fresnel::schlick(p.f0));
     if (sp) lobe->setSamplingFromMirror(loc(sp->wo));
     const Sym2& As = lobe->samplingMatrix();
-    outV2(c, i, 1, Vec2(float(std::sqrt(As.a)), float(std::sqrt(As.d))));
-    emitLobe(c, i, 0, f, inV3(c, i, kWeight), lobe);
+    set(c, i, kFilteredAlpha, Vec2(float(std::sqrt(As.a)), float(std::sqrt(As.d))));
+    emitLobe(c, i, kBsdf, f, p.weight, lobe);
 }
 
 void reg(NodeRegistry& r) {
@@ -74,22 +130,8 @@ void reg(NodeRegistry& r) {
     s.category = "bsdf";
     s.doc = "GGX reflection with NDF filtering for specular anti-aliasing (Tokuyoshi & Kaplanyan 2021): roughness matrix, "
             "height-correlated Smith G2, slope-space (K16), projected-space exact/approximate and isotropic filters.";
-    s.inputs = {
-        std::move(PortSpec::c3("weight", Vec3(1.f), "tint / layer weight")).range(0.f, 1.f),
-        std::move(PortSpec::v2("alpha", Vec2(0.05f), "unfiltered GGX α along tangent (x) and bitangent (y)")).range(0.02f, 0.9f),
-        std::move(PortSpec::v3("covariance", Vec3(0.f), "slope covariance Σ as (var_x, var_y, cov_xy), added as A + 2Σ (texture.lean covariance)")).range(0.f, 0.01f),
-        PortSpec::choice("filter", {"projected_approx", "none", "slope", "projected", "iso_max", "iso_sum", "iso_mean", "iso_rect"},
-                         "NDF filter (spec §3): projected_approx = TK21 Eq. 9 (Listing 2 reading (a)); slope = K16 (reading (b))"),
-        PortSpec::choice("kernel", {"axis_aligned", "full"}, "half-vector filters: bounding rectangle with κ clamp, or full Σ"),
-        std::move(PortSpec::f("sigma2", float(kDefaultSigma2), "pixel-filter variance σ² (0.25 reproduces K16/TK19)")).range(0.05f, 0.5f),
-        std::move(PortSpec::f("kappa", float(kDefaultKappa), "kernel clamp κ (axis-aligned and isotropic filters)")).range(0.f, 1.f),
-        PortSpec::choice("derivatives", {"analytic", "quad"}, "analytic: ray differentials; quad: 2×2 finite differences (dFdxFine)"),
-        std::move(PortSpec::f("derivative_scale", 1.f, "multiplies every screen derivative")).range(0.f, 2.f),
-        std::move(PortSpec::c3("f0", Vec3(0.04f), "Schlick F0 (1 = no Fresnel)")).range(0.f, 1.f),
-        std::move(PortSpec::n3("normal", Vec3(0, 0, 1), "shading normal")).bind(GeomBinding::N),
-        std::move(PortSpec::v3("tangent", Vec3(1, 0, 0), "tangent: direction of α_x")).bind(GeomBinding::T)};
-    s.outputs = {PortSpec::out("bsdf", TypeDesc::Closure, "the specular closure"),
-                 PortSpec::out("filtered_alpha", TypeDesc::Vec2, "sqrt of diag(Ā) at the mirror configuration (debug)")};
+    s.inputs = kParams.ports();
+    s.outputs = kOutputs.ports();
     s.flags = kGlslDirections | kGlslShading | kNeedsDerivatives;
     s.cpu = &cpu;
     s.glslFunction = "spc_bsdf_ggx_filtered";

@@ -6,21 +6,31 @@
 
 namespace specula::nodes {
 namespace {
+struct Params {
+    ClosureRef a, b;
+};
+const NodeParams<Params> kParams =
+    NodeParams<Params>().closure("a", &Params::a, "first closure").closure("b", &Params::b, "second closure");
+OutputList kOutputs;
+const OutPort<ClosureRef> kBsdf = kOutputs.add<ClosureRef>("bsdf", TypeDesc::Closure, "a + b");
+
 void cpu(EvalContext& c, const Instr& i) {
-    int a = inClosure(c, i, 0), b = inClosure(c, i, 1), o = outClosure(c, i, 0);
+    const Params p = kParams.read(c, i);
+    const int o = slotOf(c, i, kBsdf);
     Closure& dst = *c.closures[o];
     dst.clear();
-    dst.append(*c.closures[a]);
-    dst.append(*c.closures[b]);
-    c.emission[o] = c.emission[a] + c.emission[b];
+    dst.append(*c.closures[p.a.slot]);
+    dst.append(*c.closures[p.b.slot]);
+    c.emission[o] = c.emission[p.a.slot] + c.emission[p.b.slot];
 }
+
 void reg(NodeRegistry& r) {
     NodeSpec s;
     s.id = "closure.add";
     s.category = "closure";
     s.doc = "Sum of two closures a + b.";
-    s.inputs = {PortSpec::closure("a", "first closure"), PortSpec::closure("b", "second closure")};
-    s.outputs = {PortSpec::out("bsdf", TypeDesc::Closure, "a + b")};
+    s.inputs = kParams.ports();
+    s.outputs = kOutputs.ports();
     s.cpu = &cpu;
     s.glslFunction = "spc_closure_add";
     s.glslFile = "closure/add/add.glsl";

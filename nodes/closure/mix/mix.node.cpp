@@ -5,23 +5,34 @@
 
 namespace specula::nodes {
 namespace {
+struct Params {
+    ClosureRef a, b;
+    float t;
+};
+const NodeParams<Params> kParams = NodeParams<Params>()
+    .closure("a", &Params::a, "closure at t = 0")
+    .closure("b", &Params::b, "closure at t = 1")
+    .f("t", &Params::t, 0.5f, "blend factor").range(0.f, 1.f).hard(0.f, 1.f);
+OutputList kOutputs;
+const OutPort<ClosureRef> kBsdf = kOutputs.add<ClosureRef>("bsdf", TypeDesc::Closure, "a·(1 − t) + b·t");
+
 void cpu(EvalContext& c, const Instr& i) {
-    int a = inClosure(c, i, 0), b = inClosure(c, i, 1), o = outClosure(c, i, 0);
-    float t = inF(c, i, 2);
+    const Params p = kParams.read(c, i);
+    const int o = slotOf(c, i, kBsdf);
     Closure& dst = *c.closures[o];
     dst.clear();
-    dst.append(*c.closures[a], Color3(1.f - t));
-    dst.append(*c.closures[b], Color3(t));
-    c.emission[o] = c.emission[a] * (1.f - t) + c.emission[b] * t;
+    dst.append(*c.closures[p.a.slot], Color3(1.f - p.t));
+    dst.append(*c.closures[p.b.slot], Color3(p.t));
+    c.emission[o] = c.emission[p.a.slot] * (1.f - p.t) + c.emission[p.b.slot] * p.t;
 }
+
 void reg(NodeRegistry& r) {
     NodeSpec s;
     s.id = "closure.mix";
     s.category = "closure";
     s.doc = "Blend of two closures a·(1 − t) + b·t.";
-    s.inputs = {PortSpec::closure("a", "closure at t = 0"), PortSpec::closure("b", "closure at t = 1"),
-                std::move(PortSpec::f("t", 0.5f, "blend factor")).range(0.f, 1.f)};
-    s.outputs = {PortSpec::out("bsdf", TypeDesc::Closure, "a·(1 − t) + b·t")};
+    s.inputs = kParams.ports();
+    s.outputs = kOutputs.ports();
     s.cpu = &cpu;
     s.glslFunction = "spc_closure_mix";
     s.glslFile = "closure/mix/mix.glsl";

@@ -6,19 +6,54 @@
 namespace specula::nodes {
 namespace {
 
+struct FloatIn {
+    float in;
+};
+struct Vec3In {
+    Vec3 in;
+};
+enum class Channel : int { R, G, B, Luminance };
+struct ChannelIn {
+    Vec3 in;
+    Channel channel;
+};
+
+}  // namespace
+}  // namespace specula::nodes
+
+SPECULA_ENUM(specula::nodes::Channel, "SPC_CHANNEL", "r", "g", "b", "luminance");
+
+namespace specula::nodes {
+namespace {
+
+// Every conversion has the input port "in" (and convert.color3_to_float the channel choice).
+NodeParams<FloatIn> floatIn(TypeDesc) { return NodeParams<FloatIn>().f("in", &FloatIn::in, 0.f, "value to convert").range(-2.f, 2.f); }
+NodeParams<Vec3In> vec3In(TypeDesc t) {
+    NodeParams<Vec3In> l;
+    if (t == TypeDesc::Color3) l.c3("in", &Vec3In::in, Vec3(0.f), "value to convert");
+    else if (t == TypeDesc::Normal3) l.n3("in", &Vec3In::in, Vec3(0.f), "value to convert");
+    else l.v3("in", &Vec3In::in, Vec3(0.f), "value to convert");
+    return l.range(-2.f, 2.f);
+}
+const NodeParams<FloatIn> kFloatIn = floatIn(TypeDesc::Float);
+const NodeParams<Vec3In> kVec3In = vec3In(TypeDesc::Vector3);
+const NodeParams<ChannelIn> kChannelIn = NodeParams<ChannelIn>()
+    .c3("in", &ChannelIn::in, Vec3(0.f), "value to convert").range(-2.f, 2.f)
+    .choice("channel", &ChannelIn::channel, "which channel");
+
 template <int W>
 struct Broadcast {
     static void run(EvalContext& c, const Instr& i) {
-        for (int k = 0; k < W; ++k) c.r[i.out[0] + k] = c.r[i.in[0]];
+        FloatN<W> o;
+        o.fill(kFloatIn.read(c, i).in);
+        setSingleOutput(c, i, o);
     }
 };
-void copy3(EvalContext& c, const Instr& i) {
-    for (int k = 0; k < 3; ++k) c.r[i.out[0] + k] = c.r[i.in[0] + k];
-}
+void copy3(EvalContext& c, const Instr& i) { setSingleOutput(c, i, kVec3In.read(c, i).in); }
 void channel(EvalContext& c, const Instr& i) {
-    Vec3 v = inV3(c, i, 0);
-    int ch = inEnum(i, 1);
-    outF(c, i, 0, ch < 3 ? v[ch] : 0.2126f * v.x + 0.7152f * v.y + 0.0722f * v.z);
+    const ChannelIn p = kChannelIn.read(c, i);
+    const int ch = int(p.channel);
+    setSingleOutput(c, i, p.channel != Channel::Luminance ? p.in[ch] : 0.2126f * p.in.x + 0.7152f * p.in.y + 0.0722f * p.in.z);
 }
 
 NodeSpec base(TypeDesc from, TypeDesc to, const std::string& doc) {
@@ -28,7 +63,7 @@ NodeSpec base(TypeDesc from, TypeDesc to, const std::string& doc) {
     s.doc = doc;
     s.flags = kPure;
     s.glslFile = "convert/convert/convert.glsl";
-    s.inputs = {port("in", from, 0.f, "value to convert")};
+    s.inputs = from == TypeDesc::Float ? floatIn(from).ports() : vec3In(from).ports();
     s.outputs = {PortSpec::out("out", to, "converted value")};
     return s;
 }
@@ -49,7 +84,7 @@ void reg(NodeRegistry& r) {
         r.add(std::move(s));
     }
     NodeSpec s = base(TypeDesc::Color3, TypeDesc::Float, "One channel of a color3, or its Rec.709 luminance.");
-    s.inputs.push_back(PortSpec::choice("channel", {"r", "g", "b", "luminance"}, "which channel"));
+    s.inputs = kChannelIn.ports();
     s.cpu = &channel;
     s.glslFunction = "spc_convert_channel";
     r.add(std::move(s));

@@ -5,17 +5,30 @@
 
 namespace specula::nodes {
 namespace {
+struct Params {
+    Vec3 eta, k;
+    float cosTheta;
+};
+const NodeParams<Params> kParams = NodeParams<Params>()
+    .c3("eta", &Params::eta, Vec3(0.143f, 0.374f, 1.442f), "real part of the IOR (default: gold)").range(0.1f, 3.f).hard(0.f, 1e3f)
+    .c3("k", &Params::k, Vec3(3.983f, 2.385f, 1.603f), "imaginary part (extinction)").range(0.f, 5.f).hard(0.f, 1e3f)
+    .f("cos_theta", &Params::cosTheta, 1.f, "cosine of the incidence angle (default: N·V)").range(0.f, 1.f).bind(GeomBinding::NdotV);
+OutputList kOutputs;
+const OutPort<Vec3> kF = kOutputs.add<Vec3>("F", TypeDesc::Color3, "reflectance");
+
 void cpu(EvalContext& c, const Instr& i) {
-    Vec3 e = inV3(c, i, 0), k = inV3(c, i, 1); float ct = inF(c, i, 2); outV3(c, i, 0, Vec3(fresnelConductor(ct, e.x, k.x), fresnelConductor(ct, e.y, k.y), fresnelConductor(ct, e.z, k.z)));
+    const Params p = kParams.read(c, i);
+    set(c, i, kF, Vec3(fresnelConductor(p.cosTheta, p.eta.x, p.k.x), fresnelConductor(p.cosTheta, p.eta.y, p.k.y),
+                       fresnelConductor(p.cosTheta, p.eta.z, p.k.z)));
 }
+
 void reg(NodeRegistry& r) {
     NodeSpec s;
     s.id = "fresnel.conductor";
     s.category = "fresnel";
     s.doc = "Exact conductor Fresnel reflectance for a complex IOR eta + i k per RGB channel (unpolarised average of r_s and r_p).";
-    s.inputs = {std::move(PortSpec::c3("eta", Vec3(0.143f, 0.374f, 1.442f), "real part of the IOR (default: gold)")).range(0.1f, 3.f), std::move(PortSpec::c3("k", Vec3(3.983f, 2.385f, 1.603f), "imaginary part (extinction)")).range(0.f, 5.f),
-                std::move(PortSpec::f("cos_theta", 1.f, "cosine of the incidence angle (default: N·V)")).range(0.f, 1.f).bind(GeomBinding::NdotV)};
-    s.outputs = {PortSpec::out("F", TypeDesc::Color3, "reflectance")};
+    s.inputs = kParams.ports();
+    s.outputs = kOutputs.ports();
     s.flags = kPure;
     s.cpu = &cpu;
     s.glslFunction = "spc_fresnel_conductor_node";

@@ -5,17 +5,27 @@
 
 namespace specula::nodes {
 namespace {
+struct Params {
+    float ior, cosTheta;
+};
+const NodeParams<Params> kParams = NodeParams<Params>()
+    .f("ior", &Params::ior, 1.5f, "relative index of refraction n_t/n_i").range(1.0f, 3.f).hard(1e-3f, 1e3f)
+    .f("cos_theta", &Params::cosTheta, 1.f, "cosine of the incidence angle (default: N·V)").range(0.f, 1.f).bind(GeomBinding::NdotV);
+OutputList kOutputs;
+const OutPort<float> kF = kOutputs.add<float>("F", TypeDesc::Float, "reflectance");
+
 void cpu(EvalContext& c, const Instr& i) {
-    outF(c, i, 0, fresnelDielectric(inF(c, i, 1), inF(c, i, 0)));
+    const Params p = kParams.read(c, i);
+    set(c, i, kF, fresnelDielectric(p.cosTheta, p.ior));
 }
+
 void reg(NodeRegistry& r) {
     NodeSpec s;
     s.id = "fresnel.dielectric";
     s.category = "fresnel";
     s.doc = "Exact unpolarised dielectric Fresnel reflectance for relative IOR (Walter et al. 2007, Eq. 22); 1 under total internal reflection.";
-    s.inputs = {std::move(PortSpec::f("ior", 1.5f, "relative index of refraction n_t/n_i")).range(1.0f, 3.f),
-                std::move(PortSpec::f("cos_theta", 1.f, "cosine of the incidence angle (default: N·V)")).range(0.f, 1.f).bind(GeomBinding::NdotV)};
-    s.outputs = {PortSpec::out("F", TypeDesc::Float, "reflectance")};
+    s.inputs = kParams.ports();
+    s.outputs = kOutputs.ports();
     s.flags = kPure;
     s.cpu = &cpu;
     s.glslFunction = "spc_fresnel_dielectric_node";

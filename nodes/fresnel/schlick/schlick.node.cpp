@@ -5,17 +5,28 @@
 
 namespace specula::nodes {
 namespace {
+struct Params {
+    Vec3 f0;
+    float cosTheta;
+};
+const NodeParams<Params> kParams = NodeParams<Params>()
+    .c3("f0", &Params::f0, Vec3(0.04f), "reflectance at normal incidence").range(0.f, 1.f).hard(0.f, 1.f)
+    .f("cos_theta", &Params::cosTheta, 1.f, "cosine of the incidence angle (default: N·V)").range(0.f, 1.f).bind(GeomBinding::NdotV);
+OutputList kOutputs;
+const OutPort<Vec3> kF = kOutputs.add<Vec3>("F", TypeDesc::Color3, "reflectance");
+
 void cpu(EvalContext& c, const Instr& i) {
-    outV3(c, i, 0, fresnelSchlick(inF(c, i, 1), inV3(c, i, 0)));
+    const Params p = kParams.read(c, i);
+    set(c, i, kF, fresnelSchlick(p.cosTheta, p.f0));
 }
+
 void reg(NodeRegistry& r) {
     NodeSpec s;
     s.id = "fresnel.schlick";
     s.category = "fresnel";
     s.doc = "Schlick's approximation F0 + (1 - F0)(1 - cos)^5 (Schlick 1994, Eq. 24).";
-    s.inputs = {std::move(PortSpec::c3("f0", Vec3(0.04f), "reflectance at normal incidence")).range(0.f, 1.f),
-                std::move(PortSpec::f("cos_theta", 1.f, "cosine of the incidence angle (default: N·V)")).range(0.f, 1.f).bind(GeomBinding::NdotV)};
-    s.outputs = {PortSpec::out("F", TypeDesc::Color3, "reflectance")};
+    s.inputs = kParams.ports();
+    s.outputs = kOutputs.ports();
     s.flags = kPure;
     s.cpu = &cpu;
     s.glslFunction = "spc_fresnel_schlick_node";

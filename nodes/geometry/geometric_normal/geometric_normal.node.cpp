@@ -5,16 +5,20 @@
 
 namespace specula::nodes {
 namespace {
+OutputList kOutputs;
+const OutPort<Vec3> kOutNg = kOutputs.add<Vec3>("Ng", TypeDesc::Normal3, "geometric normal");
+
 void cpu(EvalContext& c, const Instr& i) {
     const ShadingPoint& sp = *c.sp;
-    outV3(c, i, 0, sp.ng);
+    set(c, i, kOutNg, sp.ng);
 }
+
 void reg(NodeRegistry& r) {
     NodeSpec s;
     s.id = "geometry.geometric_normal";
     s.category = "geometry";
     s.doc = "Geometric normal Ng (world).";
-    s.outputs = {PortSpec::out("Ng", TypeDesc::Normal3, "geometric normal")};
+    s.outputs = kOutputs.ports();
     s.flags = kGlslShading;
     s.cpu = &cpu;
     s.glslFunction = "spc_geometry_geometric_normal";

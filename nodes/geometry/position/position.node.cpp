@@ -5,16 +5,24 @@
 
 namespace specula::nodes {
 namespace {
+OutputList kOutputs;
+const OutPort<Vec3> kOutP = kOutputs.add<Vec3>("P", TypeDesc::Vector3, "position");
+const OutPort<Vec3> kOutDPdx = kOutputs.add<Vec3>("dPdx", TypeDesc::Vector3, "dP/dx per pixel");
+const OutPort<Vec3> kOutDPdy = kOutputs.add<Vec3>("dPdy", TypeDesc::Vector3, "dP/dy per pixel");
+
 void cpu(EvalContext& c, const Instr& i) {
     const ShadingPoint& sp = *c.sp;
-    outV3(c, i, 0, sp.p); outV3(c, i, 1, sp.dpdx); outV3(c, i, 2, sp.dpdy);
+    set(c, i, kOutP, sp.p);
+    set(c, i, kOutDPdx, sp.dpdx);
+    set(c, i, kOutDPdy, sp.dpdy);
 }
+
 void reg(NodeRegistry& r) {
     NodeSpec s;
     s.id = "geometry.position";
     s.category = "geometry";
     s.doc = "World-space position P and its screen-space derivatives.";
-    s.outputs = {PortSpec::out("P", TypeDesc::Vector3, "position"), PortSpec::out("dPdx", TypeDesc::Vector3, "dP/dx per pixel"), PortSpec::out("dPdy", TypeDesc::Vector3, "dP/dy per pixel")};
+    s.outputs = kOutputs.ports();
     s.flags = kGlslShading | kNeedsDerivatives;
     s.cpu = &cpu;
     s.glslFunction = "spc_geometry_position";

@@ -5,16 +5,22 @@
 
 namespace specula::nodes {
 namespace {
+OutputList kOutputs;
+const OutPort<Vec3> kOutT = kOutputs.add<Vec3>("T", TypeDesc::Vector3, "tangent");
+const OutPort<float> kOutSign = kOutputs.add<float>("sign", TypeDesc::Float, "bitangent sign (B = sign * cross(N, T))");
+
 void cpu(EvalContext& c, const Instr& i) {
     const ShadingPoint& sp = *c.sp;
-    outV3(c, i, 0, Vec3(sp.tangent)); outF(c, i, 1, sp.tangent.w);
+    set(c, i, kOutT, Vec3(sp.tangent));
+    set(c, i, kOutSign, sp.tangent.w);
 }
+
 void reg(NodeRegistry& r) {
     NodeSpec s;
     s.id = "geometry.tangent";
     s.category = "geometry";
     s.doc = "Mesh tangent T (world) and the bitangent sign.";
-    s.outputs = {PortSpec::out("T", TypeDesc::Vector3, "tangent"), PortSpec::out("sign", TypeDesc::Float, "bitangent sign (B = sign * cross(N, T))")};
+    s.outputs = kOutputs.ports();
     s.flags = kGlslShading;
     s.cpu = &cpu;
     s.glslFunction = "spc_geometry_tangent";

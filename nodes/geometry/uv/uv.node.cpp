@@ -5,16 +5,24 @@
 
 namespace specula::nodes {
 namespace {
+OutputList kOutputs;
+const OutPort<Vec2> kOutUv = kOutputs.add<Vec2>("uv", TypeDesc::Vec2, "uv0");
+const OutPort<Vec2> kOutDuvdx = kOutputs.add<Vec2>("duvdx", TypeDesc::Vec2, "d(uv)/dx per pixel");
+const OutPort<Vec2> kOutDuvdy = kOutputs.add<Vec2>("duvdy", TypeDesc::Vec2, "d(uv)/dy per pixel");
+
 void cpu(EvalContext& c, const Instr& i) {
     const ShadingPoint& sp = *c.sp;
-    outV2(c, i, 0, sp.uv); outV2(c, i, 1, sp.duvdx); outV2(c, i, 2, sp.duvdy);
+    set(c, i, kOutUv, sp.uv);
+    set(c, i, kOutDuvdx, sp.duvdx);
+    set(c, i, kOutDuvdy, sp.duvdy);
 }
+
 void reg(NodeRegistry& r) {
     NodeSpec s;
     s.id = "geometry.uv";
     s.category = "geometry";
     s.doc = "Texture coordinates uv0 and their screen-space derivatives.";
-    s.outputs = {PortSpec::out("uv", TypeDesc::Vec2, "uv0"), PortSpec::out("duvdx", TypeDesc::Vec2, "d(uv)/dx per pixel"), PortSpec::out("duvdy", TypeDesc::Vec2, "d(uv)/dy per pixel")};
+    s.outputs = kOutputs.ports();
     s.flags = kGlslShading | kNeedsDerivatives;
     s.cpu = &cpu;
     s.glslFunction = "spc_geometry_uv";

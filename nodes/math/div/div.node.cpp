@@ -6,7 +6,7 @@ namespace {
 float op(float a, float b) { return b == 0.f ? 0.f : a / b; }
 void reg(NodeRegistry& r) {
     registerTyped(r, "math", "div", mathTypes(), "Component-wise quotient a / b; 0 where b == 0.", [](NodeSpec& s, TypeDesc t) {
-        s.inputs = {port("a", t, 0.f, "numerator"), port("b", t, 1.f, "denominator (0 gives 0)")};
+        s.inputs = portsByWidth<BinaryArgs>(t, OperandDoc{0.f, "numerator"}, OperandDoc{1.f, "denominator (0 gives 0)"});
         s.outputs = {PortSpec::out("out", t, "a / b")};
         s.cpu = byWidth<Binary<op>::K>(t);
     });

@@ -4,19 +4,29 @@
 namespace specula::nodes {
 namespace {
 template <int W>
+struct MixArgs {
+    FloatN<W> a, b;
+    float t;
+    static NodeParams<MixArgs> declare(TypeDesc ty) {
+        return NodeParams<MixArgs>()
+            .typed("a", &MixArgs::a, ty, 0.f, "value at t = 0").range(-2.f, 2.f)
+            .typed("b", &MixArgs::b, ty, 1.f, "value at t = 1").range(-2.f, 2.f)
+            .f("t", &MixArgs::t, 0.5f, "interpolation factor").range(0.f, 1.f);
+    }
+};
+template <int W>
 struct Mix {
     static void run(EvalContext& c, const Instr& i) {
-        const float* a = c.r + i.in[0];
-        const float* b = c.r + i.in[1];
-        float t = c.r[i.in[2]];
-        float* o = c.r + i.out[0];
-        for (int k = 0; k < W; ++k) o[k] = a[k] * (1.f - t) + b[k] * t;
+        static const NodeParams<MixArgs<W>> kIn = MixArgs<W>::declare(widthType<W>());
+        const MixArgs<W> p = kIn.read(c, i);
+        FloatN<W> o;
+        for (int k = 0; k < W; ++k) o[k] = p.a[k] * (1.f - p.t) + p.b[k] * p.t;
+        setSingleOutput(c, i, o);
     }
 };
 void reg(NodeRegistry& r) {
     registerTyped(r, "math", "mix", mathTypes(), "Linear interpolation a·(1 − t) + b·t.", [](NodeSpec& s, TypeDesc t) {
-        s.inputs = {port("a", t, 0.f, "value at t = 0"), port("b", t, 1.f, "value at t = 1"),
-                    port("t", TypeDesc::Float, 0.5f, "interpolation factor", 0.f, 1.f)};
+        s.inputs = portsByWidth<MixArgs>(t);
         s.outputs = {PortSpec::out("out", t, "a·(1 − t) + b·t")};
         s.cpu = byWidth<Mix>(t);
     });

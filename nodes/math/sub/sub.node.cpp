@@ -6,7 +6,7 @@ namespace {
 float op(float a, float b) { return a - b; }
 void reg(NodeRegistry& r) {
     registerTyped(r, "math", "sub", mathTypes(), "Component-wise difference a - b.", [](NodeSpec& s, TypeDesc t) {
-        s.inputs = {port("a", t, 0.f, "first operand"), port("b", t, 0.f, "second operand")};
+        s.inputs = portsByWidth<BinaryArgs>(t, OperandDoc{0.f, "first operand"}, OperandDoc{0.f, "second operand"});
         s.outputs = {PortSpec::out("out", t, "a - b")};
         s.cpu = byWidth<Binary<op>::K>(t);
     });

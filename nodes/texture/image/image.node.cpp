@@ -1,6 +1,7 @@
 // texture.image: an image file (declared colorspace, converted to the working space by TextureStore)
 // filtered with the ray-differential footprint (duvdx, duvdy); GLSL: sampler2D + textureGrad.
 #include "nodes/node_common.h"
+#include "nodes/shared/texture_ports.h"
 
 #include "core/graph/graph_material.h"
 #include "core/texture/texture_store.h"
@@ -11,6 +12,21 @@
 namespace specula::nodes {
 namespace {
 
+struct Params {
+    ImageWrap wrap;  // read by prepare() as its string
+    Vec2 uv, duvdx, duvdy;
+};
+const NodeParams<Params> kParams = NodeParams<Params>()
+    .str("file", "image path (relative to the scene file)")
+    .str("colorspace", "colorspace of the file (OCIO name/alias, or \"raw\" for data)")
+    .choice("wrap", &Params::wrap, "wrap mode")
+    .v2("uv", &Params::uv, Vec2(0.f), "texture coordinates").range(-1.f, 2.f).bind(GeomBinding::UV)
+    .v2("duvdx", &Params::duvdx, Vec2(0.f), "footprint: d(uv)/dx").range(-0.01f, 0.01f).bind(GeomBinding::DUVDX)
+    .v2("duvdy", &Params::duvdy, Vec2(0.f), "footprint: d(uv)/dy").range(-0.01f, 0.01f).bind(GeomBinding::DUVDY);
+OutputList kOutputs;
+const OutPort<Vec3> kColor = kOutputs.add<Vec3>("color", TypeDesc::Color3, "RGB in the working space");
+const OutPort<float> kAlpha = kOutputs.add<float>("alpha", TypeDesc::Float, "alpha (1 if the file has none)");
+
 struct ImageData {
     const TextureStore* store;
     TextureHandle handle;
@@ -18,31 +34,32 @@ struct ImageData {
 };
 
 std::shared_ptr<const void> prepare(const PrepareContext& pc) {
-    const std::string& file = (*pc.strings)[0];
-    const std::string& cs = (*pc.strings)[1];
+    const std::string& file = pc.str("file");
+    const std::string& cs = pc.str("colorspace");
     if (!pc.load || !pc.load->textures)
-        throw InputError(pc.pointers[0], "texture.image needs a texture store (none was given to the graph loader)");
+        throw InputError(pc.pointer("file"), "texture.image needs a texture store (none was given to the graph loader)");
     std::filesystem::path p(file);
     if (p.is_relative() && !pc.load->baseDir.empty()) p = std::filesystem::path(pc.load->baseDir) / p;
     auto d = std::make_shared<ImageData>();
     d->store = pc.load->textures;
     static const TextureWrap wraps[] = {TextureWrap::Repeat, TextureWrap::Clamp, TextureWrap::Mirror};
-    const std::string& w = (*pc.strings)[2];
+    const std::string& w = pc.str("wrap");
     d->wrap = w == "clamp" ? wraps[1] : w == "mirror" ? wraps[2] : wraps[0];
     try {
         d->handle = pc.load->textures->load(p.string(), cs);
     } catch (const std::exception& e) {
-        throw InputError(pc.pointers[0], std::string("cannot load texture: ") + e.what());
+        throw InputError(pc.pointer("file"), std::string("cannot load texture: ") + e.what());
     }
     return d;
 }
 
 void cpu(EvalContext& c, const Instr& i) {
     const auto* d = static_cast<const ImageData*>(i.data);
+    const Params p = kParams.read(c, i);
     float px[4];
-    d->store->sample(d->handle, inV2(c, i, 3), inV2(c, i, 4), inV2(c, i, 5), px, 4, d->wrap);
-    outV3(c, i, 0, Vec3(px[0], px[1], px[2]));
-    outF(c, i, 1, px[3]);
+    d->store->sample(d->handle, p.uv, p.duvdx, p.duvdy, px, 4, d->wrap);
+    set(c, i, kColor, Vec3(px[0], px[1], px[2]));
+    set(c, i, kAlpha, px[3]);
 }
 
 void reg(NodeRegistry& r) {
@@ -50,14 +67,8 @@ void reg(NodeRegistry& r) {
     s.id = "texture.image";
     s.category = "texture";
     s.doc = "Filtered image lookup. v = 0 is the bottom row (OpenGL convention).";
-    s.inputs = {PortSpec::str("file", "image path (relative to the scene file)"),
-                PortSpec::str("colorspace", "colorspace of the file (OCIO name/alias, or \"raw\" for data)"),
-                PortSpec::choice("wrap", {"repeat", "clamp", "mirror"}, "wrap mode"),
-                std::move(PortSpec::v2("uv", Vec2(0.f), "texture coordinates")).range(-1.f, 2.f).bind(GeomBinding::UV),
-                std::move(PortSpec::v2("duvdx", Vec2(0.f), "footprint: d(uv)/dx")).range(-0.01f, 0.01f).bind(GeomBinding::DUVDX),
-                std::move(PortSpec::v2("duvdy", Vec2(0.f), "footprint: d(uv)/dy")).range(-0.01f, 0.01f).bind(GeomBinding::DUVDY)};
-    s.outputs = {PortSpec::out("color", TypeDesc::Color3, "RGB in the working space"),
-                 PortSpec::out("alpha", TypeDesc::Float, "alpha (1 if the file has none)")};
+    s.inputs = kParams.ports();
+    s.outputs = kOutputs.ports();
     s.flags = kNeedsDerivatives | kGlslTexture;
     s.cpu = &cpu;
     s.prepare = &prepare;

@@ -4,6 +4,7 @@
 #include "nodes/node_common.h"
 
 #include "core/graph/closure_util.h"
+#include "nodes/shared/texture_ports.h"
 #include "core/graph/graph_material.h"
 #include "core/texture/lean_moments.h"
 #include "core/texture/texture_store.h"
@@ -16,6 +17,51 @@
 
 namespace specula::nodes {
 namespace {
+
+enum class LeanFilterChoice : int { Anisotropic, Trilinear, None };
+enum class LeanCorrelation : int { Full, Ignore };
+enum class LeanWrapChoice : int { Repeat, Clamp };
+
+}  // namespace
+}  // namespace specula::nodes
+
+SPECULA_ENUM(specula::nodes::LeanFilterChoice, "SPC_LEAN_FILTER", "anisotropic", "trilinear", "none");
+SPECULA_ENUM(specula::nodes::LeanCorrelation, "SPC_LEAN_CORRELATION", "full", "ignore");
+SPECULA_ENUM(specula::nodes::LeanWrapChoice, "SPC_LEAN_WRAP", "repeat", "clamp");
+
+namespace specula::nodes {
+namespace {
+
+struct Params {
+    NormalMapConvention convention;
+    LeanFilterChoice filter;
+    LeanCorrelation correlation;
+    LeanWrapChoice wrap;
+    float strength;
+    Vec2 uv, duvdx, duvdy;
+    Vec3 normal, tangent;
+    float sign;
+};
+const NodeParams<Params> kParams = NodeParams<Params>()
+    .str("file", "tangent-space normal map, colour = (n + 1)/2, read as raw data (relative to the scene file)")
+    .choice("convention", &Params::convention, "green channel: opengl = +Y up, directx = +Y down")
+    .choice("filter", &Params::filter,
+            "footprint filter: anisotropic probes along the major axis, isotropic trilinear, or none "
+            "(bilinear on the full-resolution level: the reference)")
+    .choice("correlation", &Params::correlation, "ignore: drop the slope correlation (rho = 0, cov_xy = 0)")
+    .choice("wrap", &Params::wrap, "wrap mode")
+    .f("strength", &Params::strength, 1.f, "scales the slopes (mean x s, covariance x s^2)").range(0.f, 2.f).hard(0.f, 1e3f)
+    .v2("uv", &Params::uv, Vec2(0.f), "texture coordinates").range(-1.f, 2.f).bind(GeomBinding::UV)
+    .v2("duvdx", &Params::duvdx, Vec2(0.f), "footprint: d(uv)/dx").range(-0.5f, 0.5f).bind(GeomBinding::DUVDX)
+    .v2("duvdy", &Params::duvdy, Vec2(0.f), "footprint: d(uv)/dy").range(-0.5f, 0.5f).bind(GeomBinding::DUVDY)
+    .n3("normal", &Params::normal, Vec3(0, 0, 1), "unperturbed surface normal").bind(GeomBinding::N)
+    .v3("tangent", &Params::tangent, Vec3(1, 0, 0), "tangent (+u)").bind(GeomBinding::T)
+    .f("sign", &Params::sign, 1.f, "bitangent sign (+v = sign N x T)").range(-1.f, 1.f).bind(GeomBinding::TSign);
+OutputList kOutputs;
+const OutPort<Vec3> kNormal = kOutputs.add<Vec3>("normal", TypeDesc::Normal3, "mean normal normalize(-E[x], -E[y], 1) in world space");
+const OutPort<Vec2> kSlope = kOutputs.add<Vec2>("slope", TypeDesc::Vec2, "mean slope (E[x], E[y]) in the (T, N x T) frame");
+const OutPort<Vec3> kSigmaRho = kOutputs.add<Vec3>("sigma_rho", TypeDesc::Vector3, "(sigma_x, sigma_y, rho) of the slope Gaussian");
+const OutPort<Vec3> kCovariance = kOutputs.add<Vec3>("covariance", TypeDesc::Vector3, "slope covariance (var_x, var_y, cov_xy)");
 
 struct LeanData {
     std::shared_ptr<const LeanPyramid> pyramid;
@@ -42,9 +88,9 @@ std::shared_ptr<const LeanPyramid> sharedPyramid(const std::vector<float>& px, i
 }
 
 std::shared_ptr<const void> prepare(const PrepareContext& pc) {
-    const std::string& file = (*pc.strings)[0];
+    const std::string& file = pc.str("file");
     if (!pc.load || !pc.load->textures)
-        throw InputError(pc.pointers[0], "texture.lean needs a texture store (none was given to the graph loader)");
+        throw InputError(pc.pointer("file"), "texture.lean needs a texture store (none was given to the graph loader)");
     std::filesystem::path p(file);
     if (p.is_relative() && !pc.load->baseDir.empty()) p = std::filesystem::path(pc.load->baseDir) / p;
     auto d = std::make_shared<LeanData>();
@@ -52,34 +98,34 @@ std::shared_ptr<const void> prepare(const PrepareContext& pc) {
         TextureStore& store = *pc.load->textures;
         TextureHandle h = store.load(p.string(), "raw");  // normal maps are data: no colour conversion
         if (store.channels(h) < 2)
-            throw InputError(pc.pointers[0], "texture.lean: '" + file + "' has " + std::to_string(store.channels(h)) +
+            throw InputError(pc.pointer("file"), "texture.lean: '" + file + "' has " + std::to_string(store.channels(h)) +
                                                  " channel(s); a tangent-space normal map needs 2 or 3");
         d->pyramid = sharedPyramid(store.pixels(h), store.width(h), store.height(h), store.channels(h));
     } catch (const InputError&) {
         throw;
     } catch (const std::exception& e) {
-        throw InputError(pc.pointers[0], std::string("cannot load normal map: ") + e.what());
+        throw InputError(pc.pointer("file"), std::string("cannot load normal map: ") + e.what());
     }
     return d;
 }
 
 void cpu(EvalContext& c, const Instr& i) {
     const auto* d = static_cast<const LeanData*>(i.data);
-    const int convention = inEnum(i, 1), filter = inEnum(i, 2), correlation = inEnum(i, 3), wrap = inEnum(i, 4);
+    const Params p = kParams.read(c, i);
     static const LeanFilter filters[] = {LeanFilter::Anisotropic, LeanFilter::Trilinear, LeanFilter::None};
-    LeanMoments m = d->pyramid->lookup(inV2(c, i, 6), inV2(c, i, 7), inV2(c, i, 8), filters[std::min(filter, 2)],
-                                       wrap == 1 ? LeanWrap::Clamp : LeanWrap::Repeat, 16);
+    LeanMoments m = d->pyramid->lookup(p.uv, p.duvdx, p.duvdy, filters[int(p.filter)],
+                                       p.wrap == LeanWrapChoice::Clamp ? LeanWrap::Clamp : LeanWrap::Repeat, 16);
     // Slopes are expressed in the BSDF frame (T, N×T, N): DirectX maps and left-handed frames (sign < 0) flip y.
-    const bool flip = (convention == 1) != (inF(c, i, 11) < 0.f);
-    LeanStats s = leanStats(m, inF(c, i, 5), flip, correlation == 1);
-    Frame f = bsdfFrame(inV3(c, i, 9), inV3(c, i, 10));
+    const bool flip = (p.convention == NormalMapConvention::DirectX) != (p.sign < 0.f);
+    LeanStats s = leanStats(m, p.strength, flip, p.correlation == LeanCorrelation::Ignore);
+    Frame f = bsdfFrame(p.normal, p.tangent);
     Vec3 nt = s.meanNormal();
     Vec3 nw = nt.x * f.t + nt.y * f.b + nt.z * f.n;
     float l2 = glm::dot(nw, nw);
-    outV3(c, i, 0, l2 > 0.f ? nw / std::sqrt(l2) : f.n);
-    outV2(c, i, 1, s.mean);
-    outV3(c, i, 2, Vec3(s.sigmaX, s.sigmaY, s.rho));
-    outV3(c, i, 3, Vec3(s.varX, s.varY, s.covXY));
+    set(c, i, kNormal, l2 > 0.f ? nw / std::sqrt(l2) : f.n);
+    set(c, i, kSlope, s.mean);
+    set(c, i, kSigmaRho, Vec3(s.sigmaX, s.sigmaY, s.rho));
+    set(c, i, kCovariance, Vec3(s.varX, s.varY, s.covXY));
 }
 
 void reg(NodeRegistry& r) {
@@ -89,25 +135,8 @@ void reg(NodeRegistry& r) {
     s.doc = "LEAN mapping (Olano & Baker 2010): footprint-filtered first and second slope moments of a tangent-space "
             "normal map -> mean normal, mean slope, (sigma_x, sigma_y, rho) and the slope covariance, in the frame "
             "(T, N x T, N) of the normal/tangent inputs. Slopes: x = -nx/nz, y = -ny/nz.";
-    s.inputs = {
-        PortSpec::str("file", "tangent-space normal map, colour = (n + 1)/2, read as raw data (relative to the scene file)"),
-        PortSpec::choice("convention", {"opengl", "directx"}, "green channel: opengl = +Y up, directx = +Y down"),
-        PortSpec::choice("filter", {"anisotropic", "trilinear", "none"},
-                         "footprint filter: anisotropic probes along the major axis, isotropic trilinear, or none "
-                         "(bilinear on the full-resolution level: the reference)"),
-        PortSpec::choice("correlation", {"full", "ignore"}, "ignore: drop the slope correlation (rho = 0, cov_xy = 0)"),
-        PortSpec::choice("wrap", {"repeat", "clamp"}, "wrap mode"),
-        std::move(PortSpec::f("strength", 1.f, "scales the slopes (mean x s, covariance x s^2)")).range(0.f, 2.f),
-        std::move(PortSpec::v2("uv", Vec2(0.f), "texture coordinates")).range(-1.f, 2.f).bind(GeomBinding::UV),
-        std::move(PortSpec::v2("duvdx", Vec2(0.f), "footprint: d(uv)/dx")).range(-0.5f, 0.5f).bind(GeomBinding::DUVDX),
-        std::move(PortSpec::v2("duvdy", Vec2(0.f), "footprint: d(uv)/dy")).range(-0.5f, 0.5f).bind(GeomBinding::DUVDY),
-        std::move(PortSpec::n3("normal", Vec3(0, 0, 1), "unperturbed surface normal")).bind(GeomBinding::N),
-        std::move(PortSpec::v3("tangent", Vec3(1, 0, 0), "tangent (+u)")).bind(GeomBinding::T),
-        std::move(PortSpec::f("sign", 1.f, "bitangent sign (+v = sign N x T)")).range(-1.f, 1.f).bind(GeomBinding::TSign)};
-    s.outputs = {PortSpec::out("normal", TypeDesc::Normal3, "mean normal normalize(-E[x], -E[y], 1) in world space"),
-                 PortSpec::out("slope", TypeDesc::Vec2, "mean slope (E[x], E[y]) in the (T, N x T) frame"),
-                 PortSpec::out("sigma_rho", TypeDesc::Vector3, "(sigma_x, sigma_y, rho) of the slope Gaussian"),
-                 PortSpec::out("covariance", TypeDesc::Vector3, "slope covariance (var_x, var_y, cov_xy)")};
+    s.inputs = kParams.ports();
+    s.outputs = kOutputs.ports();
     s.flags = kNeedsDerivatives | kGlslTexture;
     s.cpu = &cpu;
     s.prepare = &prepare;

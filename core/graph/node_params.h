@@ -1,0 +1,200 @@
+// Named node parameters (OSL closure-parameter tables, BSDL style): a node declares a plain parameter struct and one
+// list binding each member to its port; PortSpecs, the typed CPU read and the GLSL enum constants all come from it.
+#pragma once
+
+#include "core/graph/node_spec.h"
+
+#include <array>
+#include <cstring>
+#include <string>
+#include <type_traits>
+#include <vector>
+
+namespace specula::graph {
+
+// A closure-typed port's value: an index into the program's closure pool.
+struct ClosureRef {
+    int slot = -1;
+};
+
+// The value of a width-generic port (math.add.<type> etc.): W floats.
+template <int W>
+using FloatN = std::array<float, W>;
+
+// Typed enums: a specialisation of EnumInfo<E> names the values (in order, the first is the default) and the prefix
+// of the GLSL constants generated for them (SPC_FRESNEL_SCHLICK = 0, ...). Declare with SPECULA_ENUM.
+template <class E>
+struct EnumInfo;
+
+#define SPECULA_ENUM(Type, glslPrefix, ...)                                     \
+    template <>                                                                 \
+    struct specula::graph::EnumInfo<Type> {                                      \
+        static const ::specula::graph::EnumDesc& desc() {                        \
+            static const ::specula::graph::EnumDesc d{glslPrefix, {__VA_ARGS__}}; \
+            return d;                                                            \
+        }                                                                        \
+    }
+
+// A typed output port of a node: its index comes from the order of declaration in an OutputList.
+template <class T>
+struct OutPort {
+    uint8_t index;
+};
+
+// Output declarations of one node; handles are typed so a write of the wrong type cannot compile.
+class OutputList {
+public:
+    template <class T>
+    OutPort<T> add(std::string name, TypeDesc t, std::string doc) {
+        static_assert(std::is_same_v<T, float> || std::is_same_v<T, Vec2> || std::is_same_v<T, Vec3> ||
+                          std::is_same_v<T, ClosureRef> || std::is_same_v<T, FloatN<1>> || std::is_same_v<T, FloatN<2>> ||
+                          std::is_same_v<T, FloatN<3>>,
+                      "output values are float, Vec2, Vec3, FloatN<W> or ClosureRef");
+        ports_.push_back(PortSpec::out(std::move(name), t, std::move(doc)));
+        return OutPort<T>{uint8_t(ports_.size() - 1)};
+    }
+    const std::vector<PortSpec>& ports() const { return ports_; }
+
+private:
+    std::vector<PortSpec> ports_;
+};
+
+// Writes an output value.
+template <class T>
+inline void set(EvalContext& c, const Instr& i, OutPort<T> o, const T& v) {
+    static_assert(sizeof(T) % sizeof(float) == 0 && !std::is_same_v<T, ClosureRef>, "numeric outputs only");
+    std::memcpy(c.r + i.out[o.index], &v, sizeof(T));
+}
+// The closure (and its emission) of a closure output.
+inline int slotOf(const EvalContext& c, const Instr& i, OutPort<ClosureRef> o) { return int(c.r[i.out[o.index]]); }
+
+// The parameter list of a node with parameter struct P: builder calls bind members to ports in order.
+template <class P>
+class NodeParams {
+    static_assert(std::is_trivially_copyable_v<P> && std::is_default_constructible_v<P>,
+                  "a parameter struct is a plain record");
+
+public:
+    NodeParams& f(std::string name, float P::*m, float def, std::string doc) {
+        return numeric(std::move(name), offsetOf(m), TypeDesc::Float, {def, 0, 0}, std::move(doc));
+    }
+    NodeParams& v2(std::string name, Vec2 P::*m, Vec2 def, std::string doc) {
+        return numeric(std::move(name), offsetOf(m), TypeDesc::Vec2, {def.x, def.y, 0}, std::move(doc));
+    }
+    NodeParams& c3(std::string name, Vec3 P::*m, Vec3 def, std::string doc) {
+        return numeric(std::move(name), offsetOf(m), TypeDesc::Color3, {def.x, def.y, def.z}, std::move(doc));
+    }
+    NodeParams& v3(std::string name, Vec3 P::*m, Vec3 def, std::string doc) {
+        return numeric(std::move(name), offsetOf(m), TypeDesc::Vector3, {def.x, def.y, def.z}, std::move(doc));
+    }
+    NodeParams& n3(std::string name, Vec3 P::*m, Vec3 def, std::string doc) {
+        return numeric(std::move(name), offsetOf(m), TypeDesc::Normal3, {def.x, def.y, def.z}, std::move(doc));
+    }
+    // A width-generic port of type t (typeWidth(t) must be W; checked when the node registers).
+    template <size_t W>
+    NodeParams& typed(std::string name, std::array<float, W> P::*m, TypeDesc t, float def, std::string doc) {
+        if (typeWidth(t) != int(W) || !isNumeric(t)) fatal("port '" + name + "' declared with a type of another width");
+        return numeric(std::move(name), offsetOf(m), t, {def, def, def}, std::move(doc));
+    }
+    NodeParams& closure(std::string name, ClosureRef P::*m, std::string doc) {
+        ports_.push_back(PortSpec::closure(std::move(name), std::move(doc)));
+        fields_.push_back({uint16_t(offsetOf(m)), 1, Field::Closure, uint8_t(ports_.size() - 1)});
+        return *this;
+    }
+    template <class E>
+    NodeParams& choice(std::string name, E P::*m, std::string doc) {
+        static_assert(std::is_enum_v<E> && sizeof(E) == sizeof(int), "enum ports bind enum class E : int members");
+        const EnumDesc& d = EnumInfo<E>::desc();
+        PortSpec p = PortSpec::choice(std::move(name), d.values, std::move(doc));
+        p.enumDesc = &d;
+        ports_.push_back(std::move(p));
+        fields_.push_back({uint16_t(offsetOf(m)), 1, Field::Enum, uint8_t(ports_.size() - 1)});
+        return *this;
+    }
+    // A string literal read by the node's prepare step only (file names, colour spaces): not in the struct.
+    NodeParams& str(std::string name, std::string doc, std::string def = "") {
+        PortSpec p = PortSpec::str(std::move(name), std::move(doc));
+        if (!def.empty()) {
+            p.defString = std::move(def);
+            p.required = false;
+        }
+        ports_.push_back(std::move(p));
+        return *this;
+    }
+
+    // Modifiers of the port declared last.
+    NodeParams& range(float lo, float hi) {  // soft range: the parity suite samples it; outside it warns
+        ports_.back().minValue = lo;
+        ports_.back().maxValue = hi;
+        return *this;
+    }
+    NodeParams& hard(float lo, float hi) {  // hard range: a literal outside it is an error
+        ports_.back().hardMin = lo;
+        ports_.back().hardMax = hi;
+        return *this;
+    }
+    NodeParams& bind(GeomBinding b) {
+        ports_.back().binding = b;
+        return *this;
+    }
+
+    const std::vector<PortSpec>& ports() const { return ports_; }
+
+    // The typed read of every bound member from the instruction's registers.
+    P read(const EvalContext& c, const Instr& i) const {
+        P p;
+        char* base = reinterpret_cast<char*>(&p);
+        for (const Field& fd : fields_) {
+            switch (fd.kind) {
+                case Field::Floats: {
+                    const float* src = c.r + i.in[fd.port];
+                    float* dst = reinterpret_cast<float*>(base + fd.offset);
+                    for (int k = 0; k < fd.width; ++k) dst[k] = src[k];
+                    break;
+                }
+                case Field::Enum: {
+                    int v = int(i.in[fd.port]);
+                    std::memcpy(base + fd.offset, &v, sizeof v);
+                    break;
+                }
+                case Field::Closure: {
+                    ClosureRef r{int(c.r[i.in[fd.port]])};
+                    std::memcpy(base + fd.offset, &r, sizeof r);
+                    break;
+                }
+            }
+        }
+        return p;
+    }
+
+private:
+    struct Field {
+        enum Kind : uint8_t { Floats, Enum, Closure };
+        uint16_t offset;
+        uint8_t width;
+        Kind kind;
+        uint8_t port;
+    };
+    template <class M>
+    static size_t offsetOf(M P::*m) {
+        static const P probe{};
+        return size_t(reinterpret_cast<const char*>(&(probe.*m)) - reinterpret_cast<const char*>(&probe));
+    }
+    NodeParams& numeric(std::string name, size_t offset, TypeDesc t, std::array<float, 3> def, std::string doc) {
+        ports_.push_back(PortSpec::make(std::move(name), t, def, std::move(doc)));
+        fields_.push_back({uint16_t(offset), uint8_t(typeWidth(t)), Field::Floats, uint8_t(ports_.size() - 1)});
+        return *this;
+    }
+    [[noreturn]] static void fatal(const std::string& what);
+    std::vector<PortSpec> ports_;
+    std::vector<Field> fields_;
+};
+
+void nodeParamsFatal(const std::string& what);
+template <class P>
+void NodeParams<P>::fatal(const std::string& what) {
+    nodeParamsFatal(what);
+    std::abort();
+}
+
+}  // namespace specula::graph
