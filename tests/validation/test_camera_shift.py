@@ -12,7 +12,6 @@ head-on, painted with its world position (emission = P + const, so every pixel h
 
 Usage: test_camera_shift.py SPECULA_BINARY SOURCE_DIR
 """
-import json
 import math
 import os
 import subprocess
