@@ -3,6 +3,8 @@
 // (issue 4 target: projected_approx ≤ +10% over unfiltered; TK21 Tables 2–3 report whole-frame times).
 #include "nodes/bsdf/ggx_filtered/filtered_ggx.h"
 
+#include "bench/ratio_reporter.h"
+
 #include <benchmark/benchmark.h>
 
 #include <cstdio>
@@ -76,26 +78,11 @@ BENCHMARK(BM_Filtered)
     ->Repetitions(5)
     ->ReportAggregatesOnly(true);
 
-class RatioReporter : public benchmark::ConsoleReporter {
-public:
-    std::map<std::string, double> medianNs;
-    std::map<std::string, std::string> label;
-    void ReportRuns(const std::vector<Run>& runs) override {
-        for (auto& r : runs)
-            if (r.aggregate_name == "median") {
-                std::string key = r.run_name.function_name + "/" + r.run_name.args;
-                medianNs[key] = r.GetAdjustedCPUTime();
-                label[key] = r.report_label;
-            }
-        ConsoleReporter::ReportRuns(runs);
-    }
-};
-
 }  // namespace
 
 int main(int argc, char** argv) {
     benchmark::Initialize(&argc, argv);
-    RatioReporter rep;
+    specula::bench::RatioReporter rep;
     benchmark::RunSpecifiedBenchmarks(&rep);
     double ggx = 0, none = 0;
     for (auto& [k, v] : rep.medianNs) {

@@ -3,6 +3,8 @@
 #include "core/graph/graph_material.h"
 #include "core/render/lobes/ggx.h"
 
+#include "bench/ratio_reporter.h"
+
 #include <benchmark/benchmark.h>
 #include <nlohmann/json.hpp>
 
@@ -85,22 +87,12 @@ void BM_GgxDirect(benchmark::State& state) {
 BENCHMARK(BM_GgxDirect)->Repetitions(5)->ReportAggregatesOnly(true);
 BENCHMARK(BM_GgxGraph)->Repetitions(5)->ReportAggregatesOnly(true);
 
-// Captures per-benchmark median CPU time so the ratio can be printed after the run.
-class RatioReporter : public benchmark::ConsoleReporter {
-public:
-    std::map<std::string, double> medianNs;
-    void ReportRuns(const std::vector<Run>& runs) override {
-        for (auto& r : runs)
-            if (r.aggregate_name == "median") medianNs[r.run_name.function_name] = r.GetAdjustedCPUTime();
-        ConsoleReporter::ReportRuns(runs);
-    }
-};
 
 }  // namespace
 
 int main(int argc, char** argv) {
     benchmark::Initialize(&argc, argv);
-    RatioReporter rep;
+    specula::bench::RatioReporter rep;
     benchmark::RunSpecifiedBenchmarks(&rep);
     if (rep.medianNs.count("BM_GgxGraph") && rep.medianNs.count("BM_GgxDirect")) {
         double g = rep.medianNs["BM_GgxGraph"], d = rep.medianNs["BM_GgxDirect"];

@@ -6,33 +6,37 @@ examples/glint/ (tubes = Fig. 8, brushed_sphere = Fig. 7, horizon = Fig. 1) and 
 
   * references: 1024 spp, box filter, GGAA off, full-resolution normal map, GPU-quad derivatives (so the glint
     footprint/LOD is the 1-pixel one the 1-spp tests use), cached as half-float EXRs (specular AOV + a coverage
-    channel) in tests/validation/glint/ with a manifest (commands, SHA-256 of scenes, maps and glint sources,
-    renderer version);
+    channel) in tests/validation/glint/ with the toolkit's manifest (tools/specula_validation/manifest.py: SHA-256
+    of scenes and maps, the derived scenes, and a behavioural fingerprint of the renderer);
   * tests: 1 spp at the pixel centre; RMSE / MAE / relative RMSE of the specular AOV inside the object mask;
-  * flicker: 16 frames, camera translated by 1/8 pixel per frame; flicker = mean over the mask of the per-pixel
-    standard deviation over t of (test_t - ref_t); frame references 256 spp, cached too.
+  * flicker: 16 frames, camera translated by 1/8 pixel per frame (`specula render --camera-shift-px`); flicker =
+    mean over the mask of the per-pixel standard deviation over t of (test_t - ref_t) (`specula compare --frames`);
+    frame references 256 spp, cached too.
 
 Usage (run from anywhere; BIN defaults to build/bin/specula):
   tools/validate_glint.py --specula BIN --refs       regenerate the cached references + manifest (~15 min on 2 cores)
+  tools/validate_glint.py --specula BIN --manifest   rewrite only the manifest for the cached files as they are
   tools/validate_glint.py --specula BIN              evaluate every method against the cached references, print tables
   tools/validate_glint.py --specula BIN --docs       ... and write docs/validation/img/glint-*.png and the generated
                                                      block of docs/validation/glint.md (adds timings, convergence figure)
   tools/validate_glint.py --specula BIN --check-cache   only check that the cache is up to date (exit 1 if stale)
-Needs python3 and oiiotool (OpenImageIO tools) to read EXRs; no numpy.
+Metrics come from `specula compare --json` (masks: the coverage channel of the cached references). Needs python3 and
+oiiotool (OpenImageIO tools); no numpy. Shared steps: tools/specula_validation/ (docs/validation/README.md).
 """
 import argparse
 import copy
-import hashlib
 import json
 import math
 import os
-import shlex
-import struct
-import subprocess
 import sys
 import tempfile
 import time
-import zlib
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from specula_validation import exr, metrics, ratio, rel  # noqa: E402
+from specula_validation.manifest import Cache  # noqa: E402
+from specula_validation.page import Canvas, colorbar, errmap, percentile, temporal_std_map, tonemap, viridis  # noqa: E402
+from specula_validation.render import Renderer, specula_version  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 EXAMPLES = os.path.join(ROOT, "examples", "glint")
@@ -41,16 +45,11 @@ MANIFEST = os.path.join(CACHE, "manifest.json")
 DOC = os.path.join(ROOT, "docs", "validation", "glint.md")
 IMG = os.path.join(ROOT, "docs", "validation", "img")
 
-# The CPU evaluation of bsdf.glint: a change here changes the references (the test then fails as stale).
-GLINT_SOURCES = ["nodes/bsdf/glint/glint_bsdf.h", "nodes/bsdf/glint/glint_bsdf.cpp",
-                 "nodes/bsdf/glint/glint_dictionary.h", "nodes/bsdf/glint/glint_dictionary.cpp",
-                 "nodes/bsdf/glint/glint.node.cpp"]
 REF_SPP = 1024      # main references (C21: 1,024 spp)
 FRAME_SPP = 256     # per-frame references of the flicker sequences
 FRAMES = 16         # K (validation.md §2)
 SHIFT_PX = 0.125    # camera translation per frame, in pixels at the look-at distance
 COVER_SPP = 64      # coverage (object mask) renders
-CACHE_FORMAT = 1
 
 
 # ---- methods -------------------------------------------------------------------------------------------------
@@ -108,36 +107,9 @@ SCENES = {
 
 
 # ---- small utilities ------------------------------------------------------------------------------------------
-def sha256_file(path):
-    h = hashlib.sha256()
-    with open(path, "rb") as f:
-        for chunk in iter(lambda: f.read(1 << 20), b""):
-            h.update(chunk)
-    return h.hexdigest()
-
-
-def sha256_json(obj):
-    return hashlib.sha256(json.dumps(obj, sort_keys=True, separators=(",", ":")).encode()).hexdigest()
-
-
-def rel(path):
-    return os.path.relpath(path, ROOT)
-
-
 def load_scene(sid):
     with open(os.path.join(EXAMPLES, SCENES[sid]["file"])) as f:
         return json.load(f)
-
-
-def map_files(scene):
-    """Relative paths (as written in the scene) of every 'file' input of every node."""
-    out = []
-    for m in scene.get("materials", {}).values():
-        for n in m.get("nodes", {}).values():
-            f = n.get("inputs", {}).get("file")
-            if isinstance(f, str) and f not in out:
-                out.append(f)
-    return out
 
 
 def glint_nodes(scene):
@@ -145,43 +117,15 @@ def glint_nodes(scene):
             if n.get("type") == "bsdf.glint"]
 
 
-def specula_version(specula):
-    return subprocess.run([specula, "--version"], capture_output=True, text=True, check=True).stdout.strip()
-
-
-def sources_sha256():
-    h = hashlib.sha256()
-    for p in GLINT_SOURCES:
-        h.update(p.encode() + b"\0")
-        with open(os.path.join(ROOT, p), "rb") as f:
-            h.update(f.read())
-    return h.hexdigest()
-
-
 # ---- scene variants ---------------------------------------------------------------------------------------------
-def camera_shift(scene, frame):
-    """Camera translated sideways (along +right) by frame * SHIFT_PX pixels measured at the look-at distance."""
-    cam = scene["camera"]
-    p, la = cam["position"], cam["look_at"]
-    up = cam.get("up", [0, 0, 1])
-    f = [la[i] - p[i] for i in range(3)]
-    dist = math.sqrt(sum(x * x for x in f))
-    f = [x / dist for x in f]
-    r = [f[1] * up[2] - f[2] * up[1], f[2] * up[0] - f[0] * up[2], f[0] * up[1] - f[1] * up[0]]
-    rn = math.sqrt(sum(x * x for x in r))
-    r = [x / rn for x in r]
-    w, h = scene["render"]["width"], scene["render"]["height"]
-    fov = math.radians(cam.get("fov", 39.6))
-    span = 2 * dist * math.tan(fov / 2)
-    px = span / (w if cam.get("fov_axis", "x") == "x" else h)
-    d = frame * SHIFT_PX * px
-    cam["position"] = [round(p[i] + d * r[i], 9) for i in range(3)]
-    cam["look_at"] = [round(la[i] + d * r[i], 9) for i in range(3)]
+def shift_px(frame):
+    """The camera offset of flicker frame 'frame' (`specula render --camera-shift-px`): sideways, 1/8 px a frame."""
+    return None if frame is None else (frame * SHIFT_PX, 0.0)
 
 
-def derive(base, method, frame=None):
-    """The scene of one method (M(...)) or of the reference, optionally at a flicker frame. Paths stay relative to
-    examples/glint/ (so the hash does not depend on the checkout); absolutize() before writing it elsewhere."""
+def derive(base, method):
+    """The scene of one method (M(...)) or of the reference (flicker frames: the same, rendered with shift_px(t)).
+    Paths stay relative to examples/glint/ (so the hash does not depend on the checkout)."""
     s = copy.deepcopy(base)
     s.pop("description", None)
     r = s["render"]
@@ -211,12 +155,10 @@ def derive(base, method, frame=None):
             nodes["lean"]["inputs"]["correlation"] = "ignore" if mode == "lean_norho" else "full"
             for k in ("img", "nm"):
                 nodes.pop(k, None)
-    if frame is not None:
-        camera_shift(s, frame)
     return s
 
 
-def coverage_scene(base, frame=None):
+def coverage_scene(base):
     """Object mask: every glint material becomes white emission, everything else black; no lights."""
     s = copy.deepcopy(base)
     s.pop("description", None)
@@ -227,157 +169,29 @@ def coverage_scene(base, frame=None):
         s["materials"][name] = {"nodes": {"e": {"type": "bsdf.emission", "inputs": {"color": 1.0 if glinty else 0.0}}},
                                 "output": "@e.bsdf"}
     s["lights"] = []
-    if frame is not None:
-        camera_shift(s, frame)
     return s
 
 
-def absolutize(scene):
-    s = copy.deepcopy(scene)
-    for m in s.get("materials", {}).values():
-        for n in m.get("nodes", {}).values():
-            f = n.get("inputs", {}).get("file")
-            if isinstance(f, str) and not os.path.isabs(f):
-                n["inputs"]["file"] = os.path.normpath(os.path.join(EXAMPLES, f))
-    return s
-
-
-# ---- rendering and image I/O -------------------------------------------------------------------------------------
-class Renderer:
-    def __init__(self, specula, workdir, verbose=False):
-        self.specula = os.path.abspath(specula)
-        self.work = workdir
-        self.verbose = verbose
-        self.commands = []
-        self.count = 0
-
-    def render(self, scene, name, extra=()):
-        """Renders 'scene' to WORK/name.exr; returns (exr path, render seconds reported by specula)."""
-        js = os.path.join(self.work, name + ".json")
-        exr = os.path.join(self.work, name + ".exr")
-        with open(js, "w") as f:
-            json.dump(absolutize(scene), f, indent=1)
-        cmd = [self.specula, "render", js, "-o", exr, "--progress", "json", *extra]
-        self.commands.append(" ".join(shlex.quote(c) for c in cmd))
-        if self.verbose:
-            print("  $", self.commands[-1], flush=True)
-        out = subprocess.run(cmd, capture_output=True, text=True)
-        if out.returncode != 0:
-            raise RuntimeError(f"render failed ({out.returncode}): {self.commands[-1]}\n{out.stderr}")
-        secs = None
-        for line in out.stdout.splitlines():
-            if '"event":"done"' in line:
-                secs = json.loads(line)["seconds"]
-        self.count += 1
-        return exr, secs
-
-
-def read_exrs(paths):
-    """Reads EXRs through `oiiotool --info -v --dumpdata` (one process per batch). Returns a list of
-    {"w", "h", "ch": {name: [floats, row-major]}}."""
-    out = []
-    for i in range(0, len(paths), 64):
-        batch = paths[i:i + 64]
-        res = subprocess.run(["oiiotool", "--info", "-v", "--dumpdata", *batch], capture_output=True, text=True)
-        if res.returncode != 0:
-            raise RuntimeError("oiiotool failed: " + res.stderr)
-        cur = None
-        for line in res.stdout.splitlines():
-            s = line.strip()
-            if s.startswith("Pixel ("):
-                a, b = s.split(":", 1)
-                x, y = a[a.index("(") + 1:a.index(")")].split(",")
-                k = int(y) * cur["w"] + int(x)
-                for name, v in zip(cur["names"], b.split()):
-                    cur["ch"][name][k] = float(v)
-            elif s.startswith("channel list:"):
-                cur["names"] = [c.strip() for c in s[len("channel list:"):].split(",")]
-                cur["ch"] = {n: [0.0] * (cur["w"] * cur["h"]) for n in cur["names"]}
-            elif " x " in s and "channel" in s and ":" in s and not line.startswith(" "):
-                dims = s.split(":", 1)[1].split(",")[0].split("x")
-                cur = {"w": int(dims[0]), "h": int(dims[1])}
-                out.append(cur)
-    if len(out) != len(paths):
-        raise RuntimeError(f"read {len(out)} images from {len(paths)} files")
-    for img in out:
-        img.pop("names", None)
-    return out
+def renderer(specula, workdir, verbose=False):
+    return Renderer(specula, workdir, verbose, scene_dir=EXAMPLES)
 
 
 def spec(img):
-    return [img["ch"]["specular.R"], img["ch"]["specular.G"], img["ch"]["specular.B"]]
+    return exr.layer(img, "specular")
 
 
-def cache_ref(renderer, scene, cover, out_path, name):
+def cache_ref(rnd, scene, cover, out_path, name, spp, frame):
     """Renders the reference and its coverage and writes the cached half EXR (specular.RGB + coverage.Y)."""
-    full, secs = renderer.render(scene, name)
-    cov, _ = renderer.render(cover, name + "_cov")
-    subprocess.run(["oiiotool", "--nosoftwareattrib", full, "--ch", "specular.R,specular.G,specular.B", cov,
-                    "--ch", "R", "--chnames", "coverage.Y", "--chappend", "--eraseattrib", "DateTime",
-                    "-d", "half", "--compression", "zip", "-o", out_path], check=True)
+    full, secs = rnd.render(scene, name, spp=spp, shift_px=shift_px(frame))
+    cov, _ = rnd.render(cover, name + "_cov", shift_px=shift_px(frame))
+    exr.write_cached(full, out_path, ["specular.R", "specular.G", "specular.B"], coverage=cov)
     return secs
 
 
 # ---- metrics ------------------------------------------------------------------------------------------------------
-def metrics(test, ref, mask):
-    """RMSE, MAE and relative RMSE (RMSE / mean reference) over the mask and the 3 channels."""
-    se = ae = sr = 0.0
-    n = 0
-    for c in range(3):
-        t, r = test[c], ref[c]
-        for i in mask:
-            e = t[i] - r[i]
-            se += e * e
-            ae += abs(e)
-            sr += r[i]
-            n += 1
-    rmse = math.sqrt(se / n)
-    return {"rmse": rmse, "mae": ae / n, "rel": rmse / (sr / n) if sr > 0 else float("nan"), "pixels": n // 3}
-
-
-def flicker(tests, refs, mask):
-    """validation.md §2: mean over the mask (and channels) of the std over t of E_t = test_t - ref_t."""
-    K = len(tests)
-    acc = 0.0
-    n = 0
-    for c in range(3):
-        for i in mask:
-            es = [tests[t][c][i] - refs[t][c][i] for t in range(K)]
-            mu = sum(es) / K
-            acc += math.sqrt(sum((e - mu) ** 2 for e in es) / K)
-            n += 1
-    return acc / n
-
-
-def flicker_map(tests, refs, w, h):
-    K = len(tests)
-    out = [0.0] * (w * h)
-    for i in range(w * h):
-        s = 0.0
-        for c in range(3):
-            es = [tests[t][c][i] - refs[t][c][i] for t in range(K)]
-            mu = sum(es) / K
-            s += math.sqrt(sum((e - mu) ** 2 for e in es) / K)
-        out[i] = s / 3
-    return out
-
-
-def mask_of(img_list, far_rows=False):
-    """Pixels with any coverage in any of the given cached references (union over the frames)."""
-    w, h = img_list[0]["w"], img_list[0]["h"]
-    m = [False] * (w * h)
-    for img in img_list:
-        cov = img["ch"]["coverage.Y"]
-        for i in range(w * h):
-            if cov[i] > 0:
-                m[i] = True
-    idx = [i for i in range(w * h) if m[i]]
-    far = None
-    if far_rows:  # the third of the object's rows nearest the horizon
-        rows = sorted({i // w for i in idx})
-        cut = rows[0] + (rows[-1] - rows[0] + 1) // 3
-        far = [i for i in idx if i // w < cut]
-    return idx, far
+def mask_pixels(img):
+    """Indices of the pixels with coverage in a cached reference (pictures only; metrics mask in `specula compare`)."""
+    return [i for i, c in enumerate(img["ch"]["coverage.Y"]) if c > 0]
 
 
 # ---- the cache -----------------------------------------------------------------------------------------------------
@@ -385,137 +199,100 @@ def ref_name(sid, frame=None):
     return f"{sid}_ref.exr" if frame is None else f"{sid}_f{frame:02d}.exr"
 
 
-def expected_entries(sid):
-    """(file name, frame or None, variant scene, coverage scene, spp) of every cached file of a scene."""
-    base = load_scene(sid)
-    out = [(ref_name(sid), None, derive(base, REF), coverage_scene(base), REF_SPP)]
-    fm = dict(REF, spp=FRAME_SPP)
-    for t in range(FRAMES):
-        out.append((ref_name(sid, t), t, derive(base, fm, t), coverage_scene(base, t), FRAME_SPP))
-    return out
-
-
-def fingerprint(specula):
-    return {"renderer_version": specula_version(specula), "glint_sources_sha256": sources_sha256(),
-            "cache_format": CACHE_FORMAT}
-
-
 def regenerate_command(specula):
     return f"python3 tools/validate_glint.py --specula {rel(os.path.abspath(specula))} --refs"
 
 
-def check_cache(specula, scenes):
-    """Returns a list of human-readable problems (empty = the cache matches scenes, maps, sources, renderer)."""
-    problems = []
-    if not os.path.exists(MANIFEST):
-        return [f"{rel(MANIFEST)} does not exist"]
-    with open(MANIFEST) as f:
-        man = json.load(f)
-    fp = fingerprint(specula)
-    for k, v in fp.items():
-        if man.get(k) != v:
-            problems.append(f"{k}: cached {man.get(k)!r}, now {v!r}")
+def cache_spec(specula, scenes):
+    """The cache as this script derives it now (tools/specula_validation/manifest.py): per scene the reference and
+    coverage variants, the main reference (REF_SPP) and FRAMES flicker frames (FRAME_SPP, camera shifted)."""
+    c = Cache(CACHE, page=rel(DOC), generator="tools/validate_glint.py", regenerate=regenerate_command(specula),
+              protocol={"ref_spp": REF_SPP, "frame_spp": FRAME_SPP, "frames": FRAMES, "shift_px": SHIFT_PX,
+                        "coverage_spp": COVER_SPP, "filter": "box", "ggaa": "off", "derivatives": "quad",
+                        "normal_map": "full resolution (texture.image with zero footprint)",
+                        "storage": "specular AOV (half) + coverage.Y (the coverage variant's R channel), ZIP"})
     for sid in scenes:
-        ms = man.get("scenes", {}).get(sid)
-        if ms is None:
-            problems.append(f"scene {sid}: not in the manifest")
-            continue
-        sp = os.path.join(EXAMPLES, SCENES[sid]["file"])
-        if ms.get("scene_sha256") != sha256_file(sp):
-            problems.append(f"scene {sid}: {rel(sp)} changed (SHA-256 differs from the manifest)")
         base = load_scene(sid)
-        for m in map_files(base):
-            p = os.path.normpath(os.path.join(EXAMPLES, m))
-            if ms.get("maps", {}).get(m) != (sha256_file(p) if os.path.exists(p) else None):
-                problems.append(f"scene {sid}: map {rel(p)} changed or missing")
-        files = {e["file"]: e for e in ms.get("files", [])}
-        for name, frame, sc, cov, spp in expected_entries(sid):
-            e = files.get(name)
-            path = os.path.join(CACHE, name)
-            if e is None:
-                problems.append(f"{name}: not in the manifest")
-            elif e.get("variant_sha256") != sha256_json(sc) or e.get("coverage_sha256") != sha256_json(cov):
-                problems.append(f"{name}: the derived reference scene changed (tools/validate_glint.py or the scene)")
-            elif not os.path.exists(path):
-                problems.append(f"{name}: missing from {rel(CACHE)}")
-            elif e.get("file_sha256") != sha256_file(path):
-                problems.append(f"{name}: file content differs from the manifest")
-    return problems
+        c.add_scene(sid, os.path.join(EXAMPLES, SCENES[sid]["file"]), EXAMPLES)
+        c.add_variant(sid, "reference", derive(base, REF))
+        c.add_variant(sid, "coverage", coverage_scene(base))
+        c.add_file(sid, ref_name(sid), "reference", REF_SPP)
+        for t in range(FRAMES):
+            c.add_file(sid, ref_name(sid, t), "reference", FRAME_SPP, shift_px(t))
+    return c
+
+
+def file_command(name, spp, frame):
+    shift = f" --camera-shift-px {frame * SHIFT_PX!r},0.0" if frame else ""
+    stem = name[:-4]
+    return (f"specula render reference.json -o {stem}_full.exr --spp {spp}{shift}  &&  specula render "
+            f"coverage.json -o {stem}_cov.exr{shift}  &&  oiiotool {stem}_full.exr --ch specular.R,specular.G,"
+            f"specular.B {stem}_cov.exr --ch R --chnames coverage.Y --chappend -d half --compression zip -o {name}")
+
+
+def check_cache(specula, scenes, workdir=None):
+    """Human-readable problems (empty = the cache matches scenes, maps, derivation and the renderer's output)."""
+    with tempfile.TemporaryDirectory(prefix="glint_probe_") as tmp:
+        return cache_spec(specula, scenes).check(specula, workdir or tmp)
+
+
+def frame_ref_noise(rnd, sid):
+    """Reference noise floor of the flicker metric: a second frame-0 reference with another seed."""
+    sc = derive(load_scene(sid), REF)
+    a, _ = rnd.render(sc, f"{sid}_noise0", spp=FRAME_SPP, shift_px=shift_px(0))
+    b, _ = rnd.render(sc, f"{sid}_noise1", spp=FRAME_SPP, shift_px=shift_px(0), seed=1)
+    ia, ib, ic = exr.read([a, b, os.path.join(CACHE, ref_name(sid, 0))])
+    idx = mask_pixels(ic)
+    d = sum(abs(spec(ia)[c][i] - spec(ib)[c][i]) for c in range(3) for i in idx) / (3 * len(idx))
+    return {"mean_abs_diff_seed0_seed1": d, "sigma_estimate": d * math.sqrt(math.pi) / 2,
+            "note": "per-pixel noise std of a 256-spp frame reference, mean over the mask "
+                    "(sqrt(pi)/2 E|X-Y|); the flicker metric cannot go below about this"}
+
+
+def write_manifest(specula, scenes, workdir, records=None, extra=None):
+    """The manifest for the cached files as they are (records: how each was made; extra: per-scene notes)."""
+    old = {}
+    if os.path.exists(MANIFEST):
+        with open(MANIFEST) as f:
+            old = json.load(f).get("scenes", {})
+    c = cache_spec(specula, scenes)
+    recs, ext = {}, {}
+    for sid in scenes:
+        for f in old.get(sid, {}).get("files", []):
+            recs[f["file"]] = {k: f[k] for k in ("command", "seconds") if k in f}
+        ext[sid] = old.get(sid, {}).get("extra", {})
+    recs.update(records or {})
+    for sid, e in (extra or {}).items():
+        ext.setdefault(sid, {}).update(e)
+    c.write(specula, workdir, recs, specula_version(specula), ext)
 
 
 def build_cache(specula, scenes, workdir, verbose):
     os.makedirs(CACHE, exist_ok=True)
-    man = {}
-    if os.path.exists(MANIFEST):
-        with open(MANIFEST) as f:
-            man = json.load(f)
-    man.update({"what": "Cached references of the glint validation (docs/validation/glint.md). Generated files: "
-                        "do not edit. Each EXR holds the specular AOV (half) and the object coverage.",
-                "regenerate": regenerate_command(specula), **fingerprint(specula),
-                "paths": "file paths inside scene_json / coverage_json are relative to examples/glint/ (write the "
-                         "JSON there, or make them absolute); frames differ from the main reference only by 'camera' "
-                         "and render.spp",
-                "protocol": {"ref_spp": REF_SPP, "frame_spp": FRAME_SPP, "frames": FRAMES, "shift_px": SHIFT_PX,
-                             "coverage_spp": COVER_SPP, "filter": "box", "ggaa": "off", "derivatives": "quad",
-                             "normal_map": "full resolution (texture.image with zero footprint)"}})
-    man.setdefault("scenes", {})
-    rnd = Renderer(specula, workdir, verbose)
+    rnd = renderer(specula, workdir, verbose)
+    records, extra = {}, {}
     for sid in scenes:
         base = load_scene(sid)
-        entry = {"scene": rel(os.path.join(EXAMPLES, SCENES[sid]["file"])),
-                 "scene_sha256": sha256_file(os.path.join(EXAMPLES, SCENES[sid]["file"])),
-                 "maps": {m: sha256_file(os.path.normpath(os.path.join(EXAMPLES, m))) for m in map_files(base)},
-                 "files": []}
-        for name, frame, sc, cov, spp in expected_entries(sid):
+        sc, cov = derive(base, REF), coverage_scene(base)
+        for frame in [None] + list(range(FRAMES)):
             t0 = time.time()
-            path = os.path.join(CACHE, name)
-            secs = cache_ref(rnd, sc, cov, path, name[:-4])
-            e = {"file": name, "frame": frame, "spp": spp, "variant_sha256": sha256_json(sc),
-                 "coverage_sha256": sha256_json(cov), "file_sha256": sha256_file(path), "render_seconds": secs,
-                 "command": f"specula render {name[:-4]}.json -o {name[:-4]}_full.exr  &&  specula render "
-                            f"{name[:-4]}_cov.json -o {name[:-4]}_cov.exr  &&  oiiotool {name[:-4]}_full.exr --ch "
-                            f"specular.R,specular.G,specular.B {name[:-4]}_cov.exr --ch R --chnames coverage.Y "
-                            f"--chappend -d half --compression zip -o {name}"}
-            if frame is None:  # the full derived scenes of the main reference (frames differ only by the camera)
-                e["scene_json"] = sc
-                e["coverage_json"] = cov
-            else:
-                e["camera"] = {"position": sc["camera"]["position"], "look_at": sc["camera"]["look_at"]}
-            entry["files"].append(e)
+            name, spp = ref_name(sid, frame), REF_SPP if frame is None else FRAME_SPP
+            secs = cache_ref(rnd, sc, cov, os.path.join(CACHE, name), name[:-4], spp, frame)
+            records[name] = {"command": file_command(name, spp, frame), "seconds": secs}
             print(f"  {name}: {spp} spp, render {secs:.1f} s (wall {time.time() - t0:.1f} s)", flush=True)
-        # Reference noise floor of the flicker metric: a second frame-0 reference with another seed.
-        sc = expected_entries(sid)[1][2]
-        sc2 = copy.deepcopy(sc)
-        sc2["render"]["seed"] = 1
-        a, _ = rnd.render(sc, f"{sid}_noise0")
-        b, _ = rnd.render(sc2, f"{sid}_noise1")
-        ia, ib, ic = read_exrs([a, b, os.path.join(CACHE, ref_name(sid, 0))])
-        idx, _ = mask_of([ic])
-        d = sum(abs(spec(ia)[c][i] - spec(ib)[c][i]) for c in range(3) for i in idx) / (3 * len(idx))
-        entry["frame_ref_noise"] = {"mean_abs_diff_seed0_seed1": d, "sigma_estimate": d * math.sqrt(math.pi) / 2,
-                                    "note": "per-pixel noise std of a 256-spp frame reference, mean over the mask "
-                                            "(sqrt(pi)/2 E|X-Y|); the flicker metric cannot go below about this"}
-        man["scenes"][sid] = entry
-        with open(MANIFEST, "w") as f:
-            json.dump(man, f, indent=1)
-            f.write("\n")
+        extra[sid] = {"frame_ref_noise": frame_ref_noise(rnd, sid)}
+    write_manifest(specula, scenes, workdir, records, extra)
     total = sum(os.path.getsize(os.path.join(CACHE, f)) for f in os.listdir(CACHE) if f.endswith(".exr"))
     print(f"cache: {rel(CACHE)} ({total / 1e6:.2f} MB of EXRs), manifest {rel(MANIFEST)}")
 
 
 # ---- evaluation --------------------------------------------------------------------------------------------------
-def compare_rmse(specula, test, ref):
-    """Full-frame RMSE of the specular AOV by `specula compare` (cross-check of the masked numbers)."""
-    out = subprocess.run([specula, "compare", test, ref, "--aov", "specular", "--json"], capture_output=True,
-                         text=True, check=True).stdout
-    return json.loads(out)["rmse"]
-
-
 def evaluate(specula, workdir, scenes, methods=None, flicker_methods=None, verbose=False, keep=False,
-             cross_check=False):
-    """Renders the 1-spp tests and compares them with the cached references. methods / flicker_methods: dict
-    scene -> list of method ids (None = all of the scene's). Returns {scene: {...}}."""
-    rnd = Renderer(specula, workdir, verbose)
+             cross_check=False, images=False):
+    """Renders the 1-spp tests and compares them with the cached references (`specula compare`, masked by the
+    references' coverage). methods / flicker_methods: dict scene -> list of method ids (None = all of the
+    scene's). images: also read the pictures' pixels (for --docs). Returns {scene: {...}}."""
+    rnd = renderer(specula, workdir, verbose)
     results = {}
     for sid in scenes:
         cfg = SCENES[sid]
@@ -523,65 +300,62 @@ def evaluate(specula, workdir, scenes, methods=None, flicker_methods=None, verbo
         mdefs = {k: (label, m) for k, label, m in cfg["methods"]}
         mids = [k for k, _, _ in cfg["methods"]] if methods is None else methods.get(sid, [])
         fids = cfg["flicker"] if flicker_methods is None else flicker_methods.get(sid, [])
+        far = cfg.get("far_rows", False)
         res = {"methods": {}, "flicker": {}, "baseline": cfg["baseline"]}
-        # main comparison
-        paths = [os.path.join(CACHE, ref_name(sid))]
-        times = {}
+        ref = os.path.join(CACHE, ref_name(sid))
+        mask = [ref + ":coverage"]
+        paths = {}
         for k in mids:
             p, secs = rnd.render(derive(base, mdefs[k][1]), f"{sid}_{k}")
-            paths.append(p)
-            times[k] = secs
-        imgs = read_exrs(paths)
-        ref = imgs[0]
-        idx, far = mask_of([ref], cfg.get("far_rows", False))
-        res["w"], res["h"] = ref["w"], ref["h"]
-        res["mask_pixels"] = len(idx)
-        res["ref"] = spec(ref)
-        res["coverage"] = ref["ch"]["coverage.Y"]
-        res["mask"] = idx
-        for k, img in zip(mids, imgs[1:]):
-            r = metrics(spec(img), spec(ref), idx)
-            if far:
-                r["far"] = metrics(spec(img), spec(ref), far)
+            paths[k] = p
+            m = metrics.compare(specula, p, ref, masks=mask)
+            r = {"rmse": m["rmse"], "mae": m["mae"], "rel": m["rel_rmse"], "pixels": m["mask_pixels"]}
+            res["mask_pixels"] = m["mask_pixels"]
+            res["w"], res["h"] = m["width"], m["height"]
+            if far:  # the third of the object's rows nearest the horizon
+                f = metrics.compare(specula, p, ref, masks=mask, top_rows="1/3")
+                r["far"] = {"rmse": f["rmse"], "mae": f["mae"], "rel": f["rel_rmse"], "pixels": f["mask_pixels"]}
             r["label"] = mdefs[k][0]
-            r["seconds_128"] = times[k]
-            r["image"] = spec(img)
+            r["seconds_128"] = secs
             if cross_check:  # masked RMSE^2 * mask / frame = full-frame RMSE^2 when nothing outside the mask differs
-                full = compare_rmse(specula, paths[1 + mids.index(k)], paths[0])
-                r["full_frame_rmse"] = full
-                r["full_frame_rmse_from_mask"] = r["rmse"] * math.sqrt(len(idx) / (ref["w"] * ref["h"]))
+                r["full_frame_rmse"] = metrics.compare(specula, p, ref)["rmse"]
+                r["full_frame_rmse_from_mask"] = r["rmse"] * math.sqrt(m["mask_pixels"] / (m["width"] * m["height"]))
             res["methods"][k] = r
+        if images:
+            imgs = exr.read([ref] + [paths[k] for k in mids])
+            res["ref"] = spec(imgs[0])
+            res["mask"] = mask_pixels(imgs[0])
+            for k, img in zip(mids, imgs[1:]):
+                res["methods"][k]["image"] = spec(img)
         # flicker
         if fids:
-            fref_paths = [os.path.join(CACHE, ref_name(sid, t)) for t in range(FRAMES)]
-            frefs = read_exrs(fref_paths)
-            fidx, ffar = mask_of(frefs, cfg.get("far_rows", False))
-            rspec = [spec(x) for x in frefs]
-            res["flicker_mask_pixels"] = len(fidx)
-            res["ref_shimmer"] = flicker(rspec, [[[0.0] * len(x[0]) for _ in range(3)] for x in rspec], fidx)
+            fref = os.path.join(CACHE, f"{sid}_f%02d.exr")
+            fmask = [fref + ":coverage"]
+            if images:
+                frefs = exr.read([fref % t for t in range(FRAMES)])
+                res["flicker_mask"] = sorted({i for x in frefs for i in mask_pixels(x)})
             for k in fids:
-                tp = []
                 for t in range(FRAMES):
-                    p, _ = rnd.render(derive(base, mdefs[k][1], t), f"{sid}_{k}_f{t:02d}")
-                    tp.append(p)
-                tspec = [spec(x) for x in read_exrs(tp)]
-                zero = [[[0.0] * len(x[0]) for _ in range(3)] for x in tspec]
-                fr = {"flicker": flicker(tspec, rspec, fidx), "label": mdefs[k][0],
-                      "shimmer": flicker(tspec, zero, fidx)}  # raw temporal std of the test itself
-                if ffar:
-                    fr["far"] = flicker(tspec, rspec, ffar)
-                fr["map"] = flicker_map(tspec, rspec, frefs[0]["w"], frefs[0]["h"])
+                    rnd.render(derive(base, mdefs[k][1]), f"{sid}_{k}_f{t:02d}", shift_px=shift_px(t))
+                pattern = os.path.join(workdir, f"{sid}_{k}_f%02d.exr")
+                m = metrics.flicker(specula, pattern, fref, FRAMES, masks=fmask)
+                res["flicker_mask_pixels"] = m["mask_pixels"]
+                res["ref_shimmer"] = m["shimmer_ref"]
+                fr = {"flicker": m["flicker"], "label": mdefs[k][0], "shimmer": m["shimmer"]}
+                if far:
+                    fr["far"] = metrics.flicker(specula, pattern, fref, FRAMES, masks=fmask, top_rows="1/3")["flicker"]
+                if images:
+                    tests = [spec(x) for x in exr.read([pattern % t for t in range(FRAMES)])]
+                    fr["map"] = temporal_std_map(tests, [spec(x) for x in frefs])
                 res["flicker"][k] = fr
                 if not keep:
-                    for p in tp:
-                        os.remove(p)
+                    for t in range(FRAMES):
+                        for ext in (".exr", ".png", ".json"):
+                            if os.path.exists((pattern % t)[:-4] + ext):
+                                os.remove((pattern % t)[:-4] + ext)
         results[sid] = res
     results["_renders"] = rnd.count
     return results
-
-
-def ratio(a, b):
-    return a / b if b > 0 else float("nan")
 
 
 def print_tables(results, file=sys.stdout):
@@ -606,99 +380,7 @@ def print_tables(results, file=sys.stdout):
                       f"{r['far']['rel']:8.3f} {rf:6.3f} {ff}", file=file)
 
 
-# ---- pictures (pure-Python PNG writer, viridis, 3x5 digit font) -----------------------------------------------------
-VIRIDIS = [(68, 1, 84), (71, 44, 122), (59, 81, 139), (44, 113, 142), (33, 144, 141), (39, 173, 129), (92, 200, 99),
-           (170, 220, 50), (253, 231, 37)]
-FONT = {"0": "111101101101111", "1": "010110010010111", "2": "111001111100111", "3": "111001111001111",
-        "4": "101101111001001", "5": "111100111001111", "6": "111100111101111", "7": "111001001001001",
-        "8": "111101111101111", "9": "111101111001111", ".": "000000000000010", "e": "000111111100111",
-        "-": "000000111000000", "+": "000010111010000", " ": "000000000000000"}
-
-
-def viridis(t):
-    t = min(max(t, 0.0), 1.0) * (len(VIRIDIS) - 1)
-    i = min(int(t), len(VIRIDIS) - 2)
-    f = t - i
-    a, b = VIRIDIS[i], VIRIDIS[i + 1]
-    return tuple(int(round(a[k] + (b[k] - a[k]) * f)) for k in range(3))
-
-
-def srgb8(x):
-    x = min(max(x, 0.0), 1.0)
-    y = 12.92 * x if x <= 0.0031308 else 1.055 * x ** (1 / 2.4) - 0.055
-    return int(round(255 * y))
-
-
-class Canvas:
-    def __init__(self, w, h, bg=(24, 24, 24)):
-        self.w, self.h = w, h
-        self.px = [list(bg) for _ in range(w * h)]
-
-    def put(self, x, y, c):
-        if 0 <= x < self.w and 0 <= y < self.h:
-            self.px[y * self.w + x] = list(c)
-
-    def blit(self, rgb, w, h, x0, y0, scale):
-        for y in range(h * scale):
-            for x in range(w * scale):
-                self.put(x0 + x, y0 + y, rgb[(y // scale) * w + x // scale])
-
-    def text(self, s, x0, y0, scale=2, color=(230, 230, 230)):
-        x = x0
-        for ch in s:
-            g = FONT.get(ch, FONT[" "])
-            for j in range(5):
-                for i in range(3):
-                    if g[j * 3 + i] == "1":
-                        for a in range(scale):
-                            for b in range(scale):
-                                self.put(x + i * scale + a, y0 + j * scale + b, color)
-            x += 4 * scale
-
-    def save(self, path):
-        raw = b"".join(b"\0" + bytes(v for p in self.px[y * self.w:(y + 1) * self.w] for v in p)
-                       for y in range(self.h))
-
-        def chunk(t, d):
-            c = struct.pack(">I", len(d)) + t + d
-            return c + struct.pack(">I", zlib.crc32(t + d) & 0xFFFFFFFF)
-        data = (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", self.w, self.h, 8, 2, 0, 0, 0)) +
-                chunk(b"IDAT", zlib.compress(raw, 9)) + chunk(b"IEND", b""))
-        with open(path, "wb") as f:
-            f.write(data)
-        return len(data)
-
-
-def tonemap(img, exposure):
-    """Specular AOV -> sRGB 8-bit with exposure and Reinhard x/(1+x) per channel."""
-    n = len(img[0])
-    return [tuple(srgb8((v := img[c][i] * exposure) / (1 + v)) for c in range(3)) for i in range(n)]
-
-
-def percentile(vals, q):
-    s = sorted(vals)
-    return s[min(len(s) - 1, int(q * (len(s) - 1)))] if s else 0.0
-
-
-def errmap(test, ref, scale):
-    n = len(ref[0])
-    return [viridis((sum(abs(test[c][i] - ref[c][i]) for c in range(3)) / 3) / scale) for i in range(n)]
-
-
-def fmt_num(x):
-    return f"{x:.3g}" if x >= 0.001 else f"{x:.1e}"
-
-
-def colorbar(cv, x0, y0, w, h, scale):
-    for x in range(w):
-        c = viridis(x / (w - 1))
-        for y in range(h):
-            cv.put(x0 + x, y0 + y, c)
-    cv.text("0", x0, y0 + h + 3)
-    s = fmt_num(scale)
-    cv.text(s, x0 + w - 8 * len(s), y0 + h + 3)
-
-
+# ---- pictures (tools/specula_validation/page.py) -----------------------------------------------------------------
 def strip(path, res, ids, S=2, gap=4):
     """Row 1: reference and methods (tone-mapped specular); row 2: |test - ref| (mean over RGB) on one viridis scale
     (99th percentile of the baseline's error inside the mask), with its colour bar under the reference column."""
@@ -775,7 +457,7 @@ def convergence(specula, workdir, verbose=False, picture=None):
     with open(os.path.join(EXAMPLES, "convergence.json")) as f:
         base = json.load(f)
     base.pop("description", None)
-    rnd = Renderer(specula, workdir, verbose)
+    rnd = renderer(specula, workdir, verbose)
     paths = {}
     for rho in CONV_RHOS:
         for lam in CONV_LAMBDAS:
@@ -784,7 +466,7 @@ def convergence(specula, workdir, verbose=False, picture=None):
             g["rho"], g["log_density"] = rho, lam
             paths[(rho, lam)], _ = rnd.render(s, f"conv_{rho}_{lam}")
     keys = list(paths)
-    imgs = dict(zip(keys, read_exrs([paths[k] for k in keys])))
+    imgs = dict(zip(keys, exr.read([paths[k] for k in keys])))
     w, h = imgs[keys[0]]["w"], imgs[keys[0]]["h"]
     rows = []
     for rho in CONV_RHOS:
@@ -823,10 +505,10 @@ def timings(specula, workdir, sid, ids, resolution="512x384", repeats=5):
     resolution, per method."""
     base = load_scene(sid)
     mdefs = {k: m for k, _, m in SCENES[sid]["methods"]}
-    rnd = Renderer(specula, workdir)
+    rnd = renderer(specula, workdir)
     out = {}
     for k in ids:
-        ts = [rnd.render(derive(base, mdefs[k]), f"time_{sid}_{k}", ["--resolution", resolution, "--threads", "1"])[1]
+        ts = [rnd.render(derive(base, mdefs[k]), f"time_{sid}_{k}", resolution=resolution, threads=1)[1]
               for _ in range(repeats)]
         out[k] = min(ts)
     return out
@@ -839,7 +521,8 @@ def write_docs(specula, results, conv_rows, times, pictures, commands):
     lines = ["<!-- BEGIN GENERATED by tools/validate_glint.py --docs: do not edit by hand -->", ""]
     with open(MANIFEST) as fm:
         man = json.load(fm)
-    lines.append(f"Renderer: `{man['renderer_version']}`; glint sources SHA-256 `{man['glint_sources_sha256'][:16]}…`; "
+    lines.append(f"Renderer: `{man['renderer_version']}` (cache fingerprint: probe renders, "
+                 f"tools/specula_validation/manifest.py); "
                  f"references {REF_SPP} spp (flicker frames {FRAME_SPP} spp), 128×96, box filter, GGAA off, "
                  f"GPU-quad derivatives. Tests: 1 spp at the pixel centre. Errors on the specular AOV, linear, inside "
                  f"the object mask, over the three channels.")
@@ -886,7 +569,7 @@ def write_docs(specula, results, conv_rows, times, pictures, commands):
                  f"the ratios are therefore the same over the whole frame.")
     lines.append("")
     lines.append("Reference noise floor of the flicker metric (per-pixel noise std of a 256-spp frame reference, mean "
-                 "over the mask): " + ", ".join(f"{sid} {man['scenes'][sid]['frame_ref_noise']['sigma_estimate']:.4f}"
+                 "over the mask): " + ", ".join(f"{sid} {man['scenes'][sid]['extra']['frame_ref_noise']['sigma_estimate']:.4f}"
                                                 for sid in results if not sid.startswith("_")) + ".")
     lines.append("")
     lines.append("Convergence (Fig. 10 analogue, σ = (0.12, 0.05), 256×256, 1 spp): relative RMSE of the glinty image "
@@ -923,6 +606,8 @@ def main():
     ap.add_argument("--refs", action="store_true", help="regenerate the cached references and the manifest")
     ap.add_argument("--docs", action="store_true", help="write docs/validation/img/glint-*.png and the page's tables")
     ap.add_argument("--check-cache", action="store_true", help="only check that the cache is up to date")
+    ap.add_argument("--manifest", action="store_true",
+                    help="rewrite the manifest for the cached files as they are (after a deliberate, verified change)")
     ap.add_argument("--scenes", default=",".join(SCENES), help="comma-separated subset of " + ",".join(SCENES))
     ap.add_argument("--workdir", help="keep intermediate renders here (default: a temporary folder)")
     ap.add_argument("--json", help="also write the numbers to this JSON file")
@@ -935,6 +620,9 @@ def main():
         t0 = time.time()
         build_cache(a.specula, scenes, work, a.verbose)
         print(f"references regenerated in {time.time() - t0:.0f} s")
+    if a.manifest:
+        write_manifest(a.specula, scenes, work)
+        print(f"wrote {rel(MANIFEST)}")
     problems = check_cache(a.specula, scenes)
     if problems:
         print("STALE glint validation cache:\n  " + "\n  ".join(problems) +
@@ -944,7 +632,7 @@ def main():
         print("cache up to date")
         return 0
     t0 = time.time()
-    results = evaluate(a.specula, work, scenes, verbose=a.verbose, cross_check=a.docs)
+    results = evaluate(a.specula, work, scenes, verbose=a.verbose, cross_check=a.docs, images=a.docs)
     commands = results.pop("_renders")
     print_tables(results)
     print(f"\n{commands} renders, {time.time() - t0:.0f} s")

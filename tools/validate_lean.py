@@ -5,18 +5,21 @@
 
 Usage: tools/validate_lean.py --specula build-lean/bin/specula [--out /tmp/lean-val] [--quick]
 
-Writes the scenes, renders, `specula compare --aov specular --json` results, the table and the pictures under
-docs/validation/ (img/lean_*.png) and prints every command it ran. The plane scene is the one the CI test
-tests/unit/test_lean_validation.cpp renders at 64x48 (keep the parameters in sync).
+Writes the scenes, renders, `specula compare --aov specular --json --mask all` results, the table and the pictures
+under docs/validation/ (img/lean_*.png) and prints every command it ran. The plane scene is the one the CI test
+tests/unit/test_lean_validation.cpp renders at 64x48 (keep the parameters in sync). Rendering and metrics go through
+the validation toolkit (tools/specula_validation/, docs/validation/README.md).
 """
 import argparse
-import json
 import math
 import os
 import shlex
 import subprocess
 import sys
-import time
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from specula_validation import metrics  # noqa: E402
+from specula_validation.render import Renderer  # noqa: E402
 
 MAP_SIZE = 256
 ROUGHNESS = 0.2
@@ -83,6 +86,7 @@ def main():
     img = os.path.join(a.docs, "img")
     os.makedirs(img, exist_ok=True)
     log = []
+    rnd = Renderer(a.specula, a.out, scene_dir=a.out)
     for kind in ("bumps", "brushed"):
         run([a.specula, "normalmap", "--kind", kind, "--size", str(MAP_SIZE), "--seed", "1",
              "-o", os.path.join(a.out, kind + ".exr")], log)
@@ -95,28 +99,26 @@ def main():
                 res = {}
                 for method in ["reference"] + METHODS:
                     spp = ref_spp if method == "reference" else 1
-                    sc = os.path.join(a.out, "%s_%s.json" % (stem, method))
-                    with open(sc, "w") as f:
-                        json.dump(scene(kind, method, mapname + ".exr", d, w, h, spp), f, indent=1)
-                    exr = os.path.join(a.out, "%s_%s.exr" % (stem, method))
-                    t0 = time.time()
-                    run([a.specula, "render", sc, "-o", exr, "--progress", "none"], log)
-                    res[method] = {"seconds": time.time() - t0}
+                    exr, secs = rnd.render(scene(kind, method, mapname + ".exr", d, w, h, spp),
+                                           "%s_%s" % (stem, method))
+                    log.append(rnd.commands[-1])
+                    res[method] = {"seconds": secs}
                     show = i in (0, len(dists) - 1)
                     if show:
                         os.replace(exr[:-4] + ".png", os.path.join(img, "lean_%s_%s.png" % (stem, method)))
                 ref = os.path.join(a.out, "%s_reference.exr" % stem)
                 for method in METHODS:
-                    cmd = [a.specula, "compare", os.path.join(a.out, "%s_%s.exr" % (stem, method)), ref,
-                           "--aov", "specular", "--json"]
-                    if i == len(dists) - 1:
-                        cmd += ["--diff", os.path.join(img, "lean_%s_%s_diff.png" % (stem, method))]
-                    res[method].update(json.loads(run(cmd, log)))
+                    test = os.path.join(a.out, "%s_%s.exr" % (stem, method))
+                    diff = os.path.join(img, "lean_%s_%s_diff.png" % (stem, method)) if i == len(dists) - 1 else None
+                    res[method].update(metrics.compare(a.specula, test, ref, diff_png=diff))
+                    log.append(" ".join(shlex.quote(c) for c in [a.specula, "compare", test, ref, "--aov", "specular",
+                                                                   "--json", "--mask", "all"] +
+                                        (["--diff", diff] if diff else [])))
                 base = res["naive"]["rmse"]
                 for method in METHODS:
                     r = res[method]
                     rows.append((kind, mapname, d, method, r["rmse"], r["mae"],
-                                 r["rmse"] / max(r["mean_b"], 1e-12), r["rmse"] / base,
+                                 r["rel_rmse"], r["rmse"] / base,
                                  res["lean_norho"]["rmse"], r["seconds"]))
                 print("%-6s %-8s d=%-5g naive %.4g  lean_norho %.4g  lean %.4g" % (
                     kind, mapname, d, res["naive"]["rmse"], res["lean_norho"]["rmse"], res["lean"]["rmse"]))
@@ -144,9 +146,9 @@ def write_page(a, rows, sweeps, w, h, ref_spp, log):
     p("- Plane: 64 × 64 quad, map tiled 90× (360 texels per unit), camera top-down at height d, fov 40°, point light")
     p("  at (0.4d, 0.1d, d) with power 50 d² (identical framing and irradiance; d × more texels per pixel).")
     p("- Sphere: radius 1, map tiled 16 × 8, camera at (0, −d, 0.3d), fov 30°, point light at (0.5d, −d, 0.8d).")
-    p("- Images %d × %d; metric: `specula compare --aov specular --json` on linear radiance, whole frame." % (w, h))
-    p("  rel. RMSE = RMSE / mean(reference). Ratio = RMSE / RMSE(naive). Times are wall-clock of the CLI run")
-    p("  (including scene load and the LEAN pyramid build, 2 shared cores).\n")
+    p("- Images %d × %d; metric: `specula compare --aov specular --json --mask all` on linear radiance, whole frame." % (w, h))
+    p("  rel. RMSE = RMSE / mean(reference). Ratio = RMSE / RMSE(naive). Times are the render times `specula render`")
+    p("  reports (2 shared cores).\n")
     p("## Results\n")
     p("| scene | map | d | texels/pixel | method | RMSE | MAE | rel. RMSE | ratio vs naive | ratio vs LEAN w/o ρ | time (s) |")
     p("|---|---|---|---|---|---|---|---|---|---|---|")
@@ -186,7 +188,12 @@ def write_page(a, rows, sweeps, w, h, ref_spp, log):
     p("  over-smoothed, and no masking/shadowing of the normal-map relief itself is modelled (LEADR would).")
     p("- Flicker (temporal stability) is not measured here.\n")
     p("## How to regenerate\n")
-    p("```\ncmake --build build-lean --target specula -j2\npython3 tools/validate_lean.py --specula build-lean/bin/specula\n```\n")
+    p("This page has no cached references (every reference is rendered on the fly); it is written entirely by")
+    p("`tools/validate_lean.py`, on the validation toolkit (`tools/specula_validation/`, docs/validation/README.md):")
+    p("renders with `specula render`, metrics and error maps with `specula compare --json --mask all --diff`.\n")
+    p("```\ncmake --build build --target specula -j2\npython3 tools/validate_lean.py --specula build/bin/specula   # ~10 min on 2 cores\n```\n")
+    p("The CI check is `tests/unit/test_lean_validation.cpp` (ctest `LeanValidation.DistanceSweepOnPlane`, label cpu),")
+    p("whose RMSE is the code of `specula compare --mask all` (plugin/cli/validation_metrics.cpp).\n")
     p("Commands run for this page:\n")
     p("```")
     L.extend(log)

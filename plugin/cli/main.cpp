@@ -5,6 +5,7 @@
 #include "plugin/cli/graph_commands.h"
 #include "plugin/cli/normalmap_command.h"
 #include "plugin/cli/nodes_command.h"
+#include "plugin/cli/validation_cli.h"
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
@@ -91,6 +92,8 @@ int main(int argc, char** argv) {
     render->add_option("--crop", crop, "Render only pixels x0,y0,x1,y1 (x1,y1 exclusive); output is the crop");
     render->add_option("--progress", progress, "Progress output: bar (stderr), json (stdout lines) or none")
         ->check(CLI::IsMember({"bar", "json", "none"}));
+    CameraShiftOptions shiftOpts;
+    addCameraShiftOptions(*render, shiftOpts);
     render->callback([&] {
         SceneOverrides ov;
         ov.spp = spp;
@@ -129,7 +132,10 @@ int main(int argc, char** argv) {
         std::string mode = progress.empty() ? (isatty(STDERR_FILENO) ? "bar" : "none") : progress;
         Scene scene;
         try {
-            scene = loadScene(scenePath, ov);
+            scene = loadSceneForRender(scenePath, ov, shiftOpts);
+        } catch (const std::invalid_argument& e) {
+            exitCode = reportError(e, kExitUsage);
+            return;
         } catch (const InputError& e) {
             exitCode = reportError(e, kExitBadInput);
             return;
@@ -141,6 +147,7 @@ int main(int argc, char** argv) {
             return;
         }
         for (const std::string& w : scene.warnings) std::fprintf(stderr, "specula: warning: %s\n", w.c_str());
+        if (printCameraIfAsked(scene, shiftOpts)) return;
         std::signal(SIGINT, onSigint);
         std::signal(SIGTERM, onSigint);
         RenderOptions opts;
@@ -191,7 +198,13 @@ int main(int argc, char** argv) {
     compare->add_option("--aov", aov, "AOV (EXR layer) to compare: beauty, diffuse, specular, ...");
     compare->add_option("--diff", diffOut, "Write a false-colour |A-B| map (PNG)");
     compare->add_flag("--json", compareJson, "Print one JSON object instead of text");
+    CompareMaskOptions maskOpts;
+    addCompareMaskOptions(*compare, maskOpts);
     compare->callback([&] {
+        if (maskOpts.active()) {  // masked metrics and frame sequences (plugin/cli/validation_cli.cpp)
+            exitCode = runMaskedCompare(imgA, imgB, aov, maskOpts, compareJson, diffOut);
+            return;
+        }
         try {
             CompareResult r = compareImages(imgA, imgB, aov, diffOut);
             if (compareJson)

@@ -2,8 +2,9 @@
 """ctest `glint_validation` (label cpu): the C21 claims of docs/validation/glint.md, in CI size, against the cached
 references of tests/validation/glint/ (only 1-spp renders here; references are never rendered by this test).
 
-  1. The cache is up to date (SHA-256 of the example scenes, normal maps, glint sources, derived reference scenes,
-     renderer version); otherwise the test FAILS and prints the regenerate command.
+  1. The cache is up to date (tools/specula_validation/manifest.py: SHA-256 of the example scenes, normal maps,
+     derived reference scenes and cached files, and the renderer's output on probe renders); otherwise the test
+     FAILS and prints the regenerate command.
   2. GGAA (s_K 0.5) lowers the specular RMSE and the flicker of the thin tubes (C21 Fig. 8) and of the plane to the
      horizon (Fig. 1a -> 1b), and the RMSE of the brushed sphere with MIP-filtered normals.
   3. LEAN + glint lowers the error at a distance against glint alone with MIP-filtered normals (Fig. 7, Fig. 1c),
@@ -13,7 +14,6 @@ Margins: each bound is the measured ratio (docs/validation/glint.md) plus a marg
 Usage: test_glint_validation.py SPECULA_BINARY SOURCE_DIR
 """
 import os
-import shutil
 import sys
 import tempfile
 import time
@@ -21,6 +21,7 @@ import time
 SPECULA, SRC = os.path.abspath(sys.argv[1]), os.path.abspath(sys.argv[2])
 sys.path.insert(0, os.path.join(SRC, "tools"))
 import validate_glint as vg  # noqa: E402
+from specula_validation import exr, ratio  # noqa: E402
 
 # scene -> 1-spp methods rendered here, and the methods whose 16-frame flicker is measured
 METHODS = {"tubes": ["c20", "ggaa05"], "sphere": ["naive_c20", "naive_ggaa05", "lean_norho_ggaa05", "lean_ggaa05"],
@@ -53,14 +54,11 @@ def value(res, kind, k):
 
 def main():
     t0 = time.time()
-    if shutil.which("oiiotool") is None:
-        print("FAIL: oiiotool (Debian: openimageio-tools) is needed to read the EXRs", file=sys.stderr)
-        return 1
+    exr.require_oiiotool()
     problems = vg.check_cache(SPECULA, list(METHODS))
     if problems:
-        print("=" * 100 + "\nFAIL: the cached glint validation references are STALE:\n  " + "\n  ".join(problems) +
-              "\n\nRegenerate them (about 15 min on 2 cores) and commit tests/validation/glint/:\n    cd " + SRC +
-              " && " + vg.regenerate_command(SPECULA) + "\n" + "=" * 100, file=sys.stderr)
+        print(vg.cache_spec(SPECULA, list(METHODS)).stale_message(problems, "glint validation (about 15 min on 2 "
+                                                                            "cores to regenerate)"), file=sys.stderr)
         return 1
     with tempfile.TemporaryDirectory(prefix="glint_validation_") as work:
         results = vg.evaluate(SPECULA, work, list(METHODS), METHODS, FLICKER)
@@ -69,7 +67,7 @@ def main():
     failed = 0
     print()
     for desc, sid, kind, num, den, measured, bound in CLAIMS:
-        r = vg.ratio(value(results[sid], kind, num), value(results[sid], kind, den))
+        r = ratio(value(results[sid], kind, num), value(results[sid], kind, den))
         ok = r <= bound
         failed += not ok
         print(f"{'ok  ' if ok else 'FAIL'} {desc}: {r:.3f} (documented {measured:.3f}, bound <= {bound:.2f})")
