@@ -102,7 +102,7 @@ std::string numberText(float v) {
     return buf;
 }
 
-// A literal outside the port's hard range is an error; outside its soft (documented) range, a warning.
+// A literal outside the port's hard range is an error; outside its soft range, a warning.
 void checkRange(const PortSpec& p, const NodeSpec& spec, const std::array<float, 3>& v, const std::string& ptr,
                 std::vector<std::string>& warnings) {
     const int w = typeWidth(p.type);
@@ -112,9 +112,9 @@ void checkRange(const PortSpec& p, const NodeSpec& spec, const std::array<float,
             throw InputError(ptr, "value " + numberText(v[c]) + where + " of input '" + p.name + "' of " + spec.id +
                                       " is outside its valid range [" + numberText(p.hardMin) + ", " + numberText(p.hardMax) + "]",
                              numberText(std::clamp(v[c], p.hardMin, p.hardMax)));
-        if (!(v[c] >= p.minValue && v[c] <= p.maxValue)) {
+        if (!(v[c] >= p.softMin && v[c] <= p.softMax)) {
             warnings.push_back(ptr + ": value " + numberText(v[c]) + where + " of input '" + p.name + "' of " + spec.id +
-                               " is outside its usual range [" + numberText(p.minValue) + ", " + numberText(p.maxValue) + "]");
+                               " is outside its usual range [" + numberText(p.softMin) + ", " + numberText(p.softMax) + "]");
             return;
         }
     }

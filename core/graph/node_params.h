@@ -123,9 +123,14 @@ public:
     }
 
     // Modifiers of the port declared last.
-    NodeParams& range(float lo, float hi) {  // soft range: the parity suite samples it; outside it warns
+    NodeParams& range(float lo, float hi) {  // typical range: documented, and the parity suite samples it
         ports_.back().minValue = lo;
         ports_.back().maxValue = hi;
+        return *this;
+    }
+    NodeParams& soft(float lo, float hi) {  // soft range: a literal outside it is valid but warns
+        ports_.back().softMin = lo;
+        ports_.back().softMax = hi;
         return *this;
     }
     NodeParams& hard(float lo, float hi) {  // hard range: a literal outside it is an error

@@ -55,8 +55,10 @@ struct PortSpec {
     std::string defString;                      // default of a string port ("" + required = must be given)
     std::vector<std::string> enumValues;        // non-empty: string port restricted to these (GLSL gets the index)
     const EnumDesc* enumDesc = nullptr;         // the typed enum behind enumValues (GLSL constants), if declared
-    float minValue = -std::numeric_limits<float>::infinity();  // documented soft range; the parity suite
-    float maxValue = std::numeric_limits<float>::infinity();   // samples inputs inside it; a literal outside warns
+    float minValue = -std::numeric_limits<float>::infinity();  // documented typical range; the parity suite
+    float maxValue = std::numeric_limits<float>::infinity();   // samples inputs inside it
+    float softMin = -std::numeric_limits<float>::infinity();   // soft range: a literal outside is valid but warns
+    float softMax = std::numeric_limits<float>::infinity();    // (e.g. an albedo above 1 creates energy)
     float hardMin = -std::numeric_limits<float>::infinity();   // hard range: a literal outside is an error
     float hardMax = std::numeric_limits<float>::infinity();
     std::string doc;

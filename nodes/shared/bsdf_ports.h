@@ -22,7 +22,7 @@ graph::NodeParams<P>& fresnelPorts(graph::NodeParams<P>& l, Vec3 defaultF0 = Vec
         .c3("f0", &P::f0, defaultF0, "Schlick F0").range(0.f, 1.f).hard(0.f, 1.f)
         .f("ior", &P::ior, 1.5f, "dielectric IOR").range(1.f, 3.f).hard(1e-3f, 1e3f)
         .c3("eta", &P::eta, Vec3(0.143f, 0.374f, 1.442f), "conductor IOR real part (gold)").range(0.1f, 3.f).hard(0.f, 1e3f)
-        .c3("k", &P::k, Vec3(3.983f, 2.385f, 1.603f), "conductor IOR imaginary part (gold)").range(0.f, 5.f).hard(0.f, 1e3f);
+        .c3("k", &P::k, Vec3(3.983f, 2.385f, 1.603f), "conductor IOR imaginary part (gold)").range(0.f, 10.f).hard(0.f, 1e3f);
 }
 
 // The Fresnel term the ports of fresnelPorts() select.

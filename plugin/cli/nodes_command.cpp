@@ -102,6 +102,8 @@ std::string rangeText(const PortSpec& p) {
     if (hasMin(p) && hasMax(p)) r = "[" + num(p.minValue) + ", " + num(p.maxValue) + "]";
     else if (hasMin(p)) r = ">= " + num(p.minValue);
     else if (hasMax(p)) r = "<= " + num(p.maxValue);
+    if (std::isfinite(p.softMin) || std::isfinite(p.softMax))
+        r += (r.empty() ? "" : "; ") + std::string("warns outside [") + num(p.softMin) + ", " + num(p.softMax) + "]";
     const bool lo = std::isfinite(p.hardMin), hi = std::isfinite(p.hardMax);
     if (lo || hi) {
         std::string h = lo && hi ? "[" + num(p.hardMin) + ", " + num(p.hardMax) + "]" : lo ? ">= " + num(p.hardMin) : "<= " + num(p.hardMax);
@@ -409,6 +411,8 @@ ojson portJson(const PortSpec& p, bool input) {
         if (!p.enumValues.empty()) j["enum"] = p.enumValues;
         j["min"] = jsonNum(p.minValue);
         j["max"] = jsonNum(p.maxValue);
+        j["soft_min"] = jsonNum(p.softMin);
+        j["soft_max"] = jsonNum(p.softMax);
         j["hard_min"] = jsonNum(p.hardMin);
         j["hard_max"] = jsonNum(p.hardMax);
         j["binding"] = p.binding == GeomBinding::None ? ojson(nullptr) : ojson(bindingName(p.binding));

@@ -132,7 +132,7 @@ TEST(GraphErrors, LiteralOutsideSoftRangeWarns) {
     std::vector<std::string> warnings;
     GraphLoadContext ctx;
     ctx.warnings = &warnings;
-    // weight 2 is valid (hard range [0, 1e6]) but outside the usual [0, 1]; roughness 0.5 is inside both.
+    // weight 2 is valid (hard range [0, 1e6]) but outside the soft [0, 1]: it creates energy; roughness 0.5 is fine.
     loadGraphMaterial({{"nodes", {{"spec", ggx({{"weight", 2.0}, {"roughness", 0.5}})}}}, {"output", "@spec.bsdf"}},
                       "/materials/steel", ctx);
     ASSERT_EQ(warnings.size(), 1u);

@@ -25,7 +25,7 @@ struct Params {
 
 NodeParams<Params> declare() {
     NodeParams<Params> l;
-    l.c3("weight", &Params::weight, Vec3(1.f), "tint / layer weight").range(0.f, 1.f).hard(0.f, 1e6f)
+    l.c3("weight", &Params::weight, Vec3(1.f), "tint / layer weight").range(0.f, 1.f).soft(0.f, 1.f).hard(0.f, 1e6f)
         .f("roughness", &Params::roughness, 0.3f, "material roughness, Beckmann alpha = roughness^2").range(0.1f, 1.f).hard(0.f, 1.f)
         .v2("slope", &Params::slope, Vec2(0.f), "mean slope (E[x], E[y]) in the (T, N x T) frame").range(-0.5f, 0.5f)
         .v3("covariance", &Params::covariance, Vec3(0.f), "slope covariance (var_x, var_y, cov_xy)").range(0.f, 0.05f);

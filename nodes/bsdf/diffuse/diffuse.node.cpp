@@ -12,7 +12,7 @@ struct Params {
     Vec3 normal, tangent;
 };
 const NodeParams<Params> kParams = NodeParams<Params>()
-    .c3("color", &Params::color, Vec3(0.8f), "albedo").range(0.f, 1.f).hard(0.f, 1e6f)
+    .c3("color", &Params::color, Vec3(0.8f), "albedo").range(0.f, 1.f).soft(0.f, 1.f).hard(0.f, 1e6f)
     .n3("normal", &Params::normal, Vec3(0, 0, 1), "shading normal").bind(GeomBinding::N)
     .v3("tangent", &Params::tangent, Vec3(1, 0, 0), "tangent (orients the frame)").bind(GeomBinding::T);
 OutputList kOutputs;

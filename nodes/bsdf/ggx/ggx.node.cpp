@@ -22,7 +22,7 @@ struct Params {
 
 NodeParams<Params> declare() {
     NodeParams<Params> l;
-    l.c3("weight", &Params::weight, Vec3(1.f), "tint / layer weight").range(0.f, 1.f).hard(0.f, 1e6f)
+    l.c3("weight", &Params::weight, Vec3(1.f), "tint / layer weight").range(0.f, 1.f).soft(0.f, 1.f).hard(0.f, 1e6f)
         .f("roughness", &Params::roughness, 0.5f, "perceptual roughness, α = roughness²").range(0.f, 1.f).hard(0.f, 1.f)
         .f("anisotropy", &Params::anisotropy, 0.f, "0 = isotropic; stretches α along the tangent").range(0.f, 1.f).hard(0.f, 1.f);
     fresnelPorts(l);

@@ -44,7 +44,7 @@ struct Params {
 };
 
 const NodeParams<Params> kParams = NodeParams<Params>()
-    .c3("weight", &Params::weight, Vec3(1.f), "tint / layer weight").range(0.f, 1.f).hard(0.f, 1e6f)
+    .c3("weight", &Params::weight, Vec3(1.f), "tint / layer weight").range(0.f, 1.f).soft(0.f, 1.f).hard(0.f, 1e6f)
     .v2("alpha", &Params::alpha, Vec2(0.05f), "unfiltered GGX α along tangent (x) and bitangent (y)").range(0.02f, 0.9f).hard(0.f, 1.f)
     .v3("covariance", &Params::covariance, Vec3(0.f), "slope covariance Σ as (var_x, var_y, cov_xy), added as A + 2Σ (texture.lean covariance)").range(0.f, 0.01f)
     .choice("filter", &Params::filter, "NDF filter (spec §3): projected_approx = TK21 Eq. 9 (Listing 2 reading (a)); slope = K16 (reading (b))")

@@ -42,7 +42,7 @@ struct Params {
 };
 
 const NodeParams<Params> kParams = NodeParams<Params>()
-    .c3("weight", &Params::weight, Vec3(1.f), "tint / layer weight").range(0.f, 1.f).hard(0.f, 1e6f)
+    .c3("weight", &Params::weight, Vec3(1.f), "tint / layer weight").range(0.f, 1.f).soft(0.f, 1.f).hard(0.f, 1e6f)
     .f("sigma_x", &Params::sigmaX, 0.16f, "RMS slope of the converged lobe along the tangent (alpha = sqrt(2) sigma)").range(0.05f, 1.f).hard(0.f, 10.f)
     .f("sigma_y", &Params::sigmaY, 0.16f, "RMS slope along the bitangent").range(0.05f, 1.f).hard(0.f, 10.f)
     .f("rho", &Params::rho, 0.f, "slope correlation (C21 Eq. 18), clamped to +-0.99").range(-0.9f, 0.9f).hard(-1.f, 1.f)

@@ -11,7 +11,7 @@ struct Params {
 };
 const NodeParams<Params> kParams = NodeParams<Params>()
     .c3("eta", &Params::eta, Vec3(0.143f, 0.374f, 1.442f), "real part of the IOR (default: gold)").range(0.1f, 3.f).hard(0.f, 1e3f)
-    .c3("k", &Params::k, Vec3(3.983f, 2.385f, 1.603f), "imaginary part (extinction)").range(0.f, 5.f).hard(0.f, 1e3f)
+    .c3("k", &Params::k, Vec3(3.983f, 2.385f, 1.603f), "imaginary part (extinction)").range(0.f, 10.f).hard(0.f, 1e3f)
     .f("cos_theta", &Params::cosTheta, 1.f, "cosine of the incidence angle (default: N·V)").range(0.f, 1.f).bind(GeomBinding::NdotV);
 OutputList kOutputs;
 const OutPort<Vec3> kF = kOutputs.add<Vec3>("F", TypeDesc::Color3, "reflectance");
