@@ -3,6 +3,7 @@
 #pragma once
 
 #include "core/graph/graph.h"
+#include "core/graph/graph_material.h"
 
 #include <array>
 #include <cstdint>
@@ -14,6 +15,12 @@ namespace specula::codegen {
 struct GlslOptions {
     std::string materialName;        // for the header comment
     bool literalsAsUniforms = true;  // JSON literals -> uniform block (tweakable); false: inline constants
+    // Prefix of every material-specific name (entry points, uniform block and members, resources), so that several
+    // materials live in one shader: "" gives specula_eval(...), "gold" gives specula_gold_eval(...). Node functions,
+    // the prelude and enum constants are shared and guarded.
+    std::string prefix;
+    int bindingBase = 0;  // the uniform block takes bindingBase, resources bindingBase + 1, + 2, ...
+    int set = -1;         // Vulkan descriptor set (layout(set = S, ...)); -1: none (OpenGL)
 };
 
 // One member of the std140 uniform block SpeculaMaterialParams (binding 0).
@@ -25,23 +32,37 @@ struct GlslUniform {
     std::string pointer;         // JSON pointer of the literal
 };
 
-// One sampler2D the host must bind: the TextureStore image (working space, MIP-mapped, rows
-// bottom-up), with wrap mode 'wrap' and trilinear filtering.
-struct GlslTexture {
-    std::string name;  // uniform name, e.g. spc_tex_albedo
-    int binding = 0;   // texture unit
-    std::string nodeId, file, colorspace, wrap;
+// One GPU resource the host must bind (graph::ResourceSpec of a live node): its uniform, binding and what it holds.
+// exportGlslResources() produces the texels and sampler state.
+struct GlslResource {
+    std::string name;      // uniform name in the module, e.g. spc_res_albedo_image
+    std::string glslType;  // sampler2D, sampler1DArray, ...
+    int binding = 0, set = -1;
+    std::string nodeId, nodeType, resource;  // the node instance and the resource's parameter name
+    graph::ResourceSpec::Kind kind = graph::ResourceSpec::Kind::ImageFile;
+    std::string file, colorspace;  // image-file resources: the file as given in the material, its colour space
 };
 
 struct GlslModule {
     std::string source;
     std::vector<GlslUniform> uniforms;
     uint32_t uniformBlockSize = 0;  // bytes (0: no block)
-    std::vector<GlslTexture> textures;
+    int uniformBinding = 0, uniformSet = -1;
+    std::vector<GlslResource> resources;
     std::vector<std::string> nodeTypes;  // used node types, sorted
+    std::string entryPrefix;             // "specula_" + prefix + "_" (or "specula_"): entry points are <entryPrefix>eval ...
 };
 
 GlslModule emitGlsl(const graph::GraphDesc& g, const GlslOptions& opt = {});
+
+// The texels of every resource of one node instance (its string inputs and their JSON pointers, in port order),
+// prepared with 'load' as the graph loader would.
+std::vector<graph::ResourceImage> nodeResourceImages(const graph::NodeSpec& spec, const std::vector<std::string>& strings,
+                                                     const std::vector<std::string>& pointers, const GraphLoadContext& load);
+// The texels and sampler state of every resource of 'mod' (same order), from the material's nodes prepared with
+// 'load' (texture files are read through its TextureStore). Throws specula::InputError like the graph loader.
+std::vector<graph::ResourceImage> exportGlslResources(const graph::GraphDesc& g, const GlslModule& mod,
+                                                      const GraphLoadContext& load);
 
 // Bit-exact GLSL spelling of a float ("%.9g" round-trips every float; always has '.' or 'e').
 std::string glslFloat(float v);

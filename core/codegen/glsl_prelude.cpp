@@ -7,6 +7,9 @@ namespace specula::codegen {
 
 const std::string& glslPrelude() {
     static const std::string s = R"GLSL(// ---- Specula prelude -------------------------------------------------------------------------
+// Guarded: several material modules may be concatenated into one shader.
+#ifndef SPECULA_PRELUDE
+#define SPECULA_PRELUDE
 const float SPC_PI = 3.14159265358979323846;
 const float SPC_INV_PI = 0.31830988618379067154;
 
@@ -22,13 +25,49 @@ struct SpeculaShadingInputs {
     vec3 dPdx, dPdy;        // screen-space derivatives of P per pixel step (CPU: ray differentials)
     vec2 duvdx, duvdy;      // of uv
     vec3 dNdx, dNdy;        // of N
+    vec3 dwodx, dwody;      // of the view direction wo (0: orthographic camera)
 };
 
-// A closure evaluated for one (wo, wi) pair: f = BSDF times cos(theta_i), emission = emitted radiance.
+// What a closure is asked (CPU: BsdfQuery), the first parameter of every BSDF function. kind DIRECTION: f·cos for the
+// pair (wo, wi); kind POLYGON: the integral of f·cos over the polygon polygon[0..vertex_count) (offsets from the
+// shading point, world space, counter-clockwise seen from it), for lobes with a closed form (the others set
+// SpeculaClosure.partial). light_distance: distance to a point light (filtered lobes differentiate wi with it);
+// +inf for directions.
+const int SPC_QUERY_DIRECTION = 0;
+const int SPC_QUERY_POLYGON = 1;
+struct SpeculaClosureQuery {
+    int kind;
+    vec3 wo;
+    vec3 wi;
+    float light_distance;
+    vec3 polygon[4];
+    int vertex_count;
+};
+SpeculaClosureQuery specula_direction_query(vec3 wo, vec3 wi, float light_distance) {
+    SpeculaClosureQuery q;
+    q.kind = SPC_QUERY_DIRECTION;
+    q.wo = wo;
+    q.wi = wi;
+    q.light_distance = light_distance;
+    for (int k = 0; k < 4; ++k) q.polygon[k] = vec3(0.0);
+    q.vertex_count = 0;
+    return q;
+}
+
+// A closure's answer to a query: f = BSDF times cos(theta_i) (or its polygon integral), emission = emitted
+// radiance; partial = some lobe could not answer a polygon query (the host samples the closure for that light).
 struct SpeculaClosure {
     vec3 f;
     vec3 emission;
+    bool partial;
 };
+SpeculaClosure spc_closure_none() {
+    SpeculaClosure c;
+    c.f = vec3(0.0);
+    c.emission = vec3(0.0);
+    c.partial = false;
+    return c;
+}
 
 SpeculaShadingInputs specula_shading_inputs(vec3 P, vec3 N, vec3 Ng, vec4 T, vec2 uv) {
     SpeculaShadingInputs s;
@@ -43,6 +82,15 @@ SpeculaShadingInputs specula_shading_inputs(vec3 P, vec3 N, vec3 Ng, vec4 T, vec
     s.duvdy = dFdy(uv);
     s.dNdx = dFdx(s.normal);
     s.dNdy = dFdy(s.normal);
+    s.dwodx = vec3(0.0);
+    s.dwody = vec3(0.0);
+    return s;
+}
+// The same with the view direction wo (unit, towards the viewer), whose screen derivatives filtered lobes use.
+SpeculaShadingInputs specula_shading_inputs(vec3 P, vec3 N, vec3 Ng, vec4 T, vec2 uv, vec3 wo) {
+    SpeculaShadingInputs s = specula_shading_inputs(P, N, Ng, T, uv);
+    s.dwodx = dFdx(wo);
+    s.dwody = dFdy(wo);
     return s;
 }
 
@@ -119,6 +167,7 @@ vec3 spc_fresnel_schlick(float cosTheta, vec3 f0) {
     float m5 = (m * m) * (m * m) * m;
     return f0 + (vec3(1.0) - f0) * m5;
 }
+#endif  // SPECULA_PRELUDE
 )GLSL";
     return s;
 }

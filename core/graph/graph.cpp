@@ -189,6 +189,8 @@ GraphDesc parseGraph(const json& mat, const std::string& pointer, const ParseOpt
                 if (isRef) {
                     if (p.type == TypeDesc::String)
                         throw InputError(ip, "input '" + p.name + "' of " + spec.id + " takes a literal string and cannot be connected");
+                    if (p.uniform)
+                        throw InputError(ip, "input '" + p.name + "' of " + spec.id + " is one value per material (uniform) and cannot be connected");
                     std::string ref = val.get<std::string>().substr(1);
                     size_t dot = ref.rfind('.');
                     std::string srcId = dot == std::string::npos ? ref : ref.substr(0, dot);

@@ -138,6 +138,10 @@ public:
         ports_.back().hardMax = hi;
         return *this;
     }
+    NodeParams& uniform() {  // one value per material (sampler state, derivative mode): never connected
+        ports_.back().uniform = true;
+        return *this;
+    }
     NodeParams& bind(GeomBinding b) {
         ports_.back().binding = b;
         return *this;

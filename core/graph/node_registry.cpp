@@ -1,6 +1,7 @@
 // NodeRegistry, NodeSpec helpers and the geometric default bindings.
 #include "core/graph/node_spec.h"
 
+#include "core/codegen/glsl_signature.h"
 #include "core/codegen/glsl_sources.h"
 #include "core/render/shading.h"
 
@@ -52,7 +53,7 @@ const char* bindingGlsl(GeomBinding b) {
         case GeomBinding::Ng: return "s.geometric_normal";
         case GeomBinding::T: return "s.tangent.xyz";
         case GeomBinding::TSign: return "s.tangent.w";
-        case GeomBinding::NdotV: return "dot(s.normal, wo)";
+        case GeomBinding::NdotV: return "dot(s.normal, q.wo)";
     }
     return "";
 }
@@ -98,25 +99,17 @@ std::vector<std::string> NodeSpec::outputNames() const {
 const std::string* NodeSpec::glslSource() const { return codegen::embeddedGlsl(glslFile); }
 
 std::string NodeSpec::glslPrototype() const {
-    std::string s = "void " + glslFunction + "(";
-    bool first = true;
-    auto arg = [&](const std::string& a) {
-        if (!first) s += ", ";
-        s += a;
-        first = false;
-    };
-    if (has(kGlslShading)) arg("SpeculaShadingInputs");
-    if (has(kGlslDirections)) {
-        arg("vec3");
-        arg("vec3");
+    try {
+        codegen::GlslNodeBinding b = codegen::bindGlslFunction(*this);
+        std::string r = "void " + glslFunction + "(";
+        for (size_t i = 0; i < b.prototype.params.size(); ++i) {
+            const codegen::GlslParam& p = b.prototype.params[i];
+            r += (i ? ", " : "") + std::string(p.out ? "out " : "") + p.type + " " + p.name;
+        }
+        return r + ")";
+    } catch (const std::exception& e) {
+        return std::string("(unbound: ") + e.what() + ")";
     }
-    if (has(kGlslTexture)) arg("sampler2D");
-    for (auto& p : inputs) {
-        if (p.type == TypeDesc::String && p.enumValues.empty()) continue;  // plain strings stay on the host
-        arg(glslTypeName(p.type));
-    }
-    for (auto& p : outputs) arg(std::string("out ") + glslTypeName(p.type));
-    return s + ")";
 }
 
 NodeRegistry& NodeRegistry::instance() {
@@ -148,6 +141,15 @@ std::vector<const NodeSpec*> NodeRegistry::all() const {
     std::vector<const NodeSpec*> r;
     for (auto& [k, v] : specs_) r.push_back(v.get());
     return r;
+}
+
+const char* resourceKindName(ResourceSpec::Kind k) {
+    switch (k) {
+        case ResourceSpec::Kind::ImageFile: return "image_file";
+        case ResourceSpec::Kind::DerivedImage: return "derived_image";
+        case ResourceSpec::Kind::BuiltinTable: return "builtin_table";
+    }
+    return "?";
 }
 
 void nodeParamsFatal(const std::string& what) {

@@ -64,6 +64,8 @@ struct PortSpec {
     std::string doc;
     GeomBinding binding = GeomBinding::None;
     bool required = false;  // no default: must be connected (closures) or given (strings)
+    bool uniform = false;   // one value per material, never per shading point (sampler state, derivative mode):
+                            // connections are refused, and GLSL may rely on uniform control flow
 
     // Fluent construction used by the node files.
     static PortSpec make(std::string n, TypeDesc t, std::array<float, 3> d, std::string doc_) {
@@ -107,6 +109,38 @@ struct PortSpec {
     }
 };
 
+// Texels of a GPU resource as a host uploads them: RGBA32F levels (level 0 first), rows bottom-up, and the sampler
+// state the node's GLSL expects.
+struct ResourceImage {
+    struct Level {
+        int width = 0, height = 0;  // height = layer count for 1D arrays
+        std::vector<float> rgba;    // width * height * 4 floats
+    };
+    std::vector<Level> levels;
+    std::string colorspace = "raw";  // the colour space of the texel values ("raw": data)
+    bool generateMipmaps = false;    // only level 0 is given: the host builds the MIP chain (glGenerateMipmap)
+    std::string minFilter = "linear_mipmap_linear", magFilter = "linear";  // GL names: nearest, linear, *_mipmap_*
+    std::string wrapS = "repeat", wrapT = "repeat";                        // repeat, clamp_to_edge, mirrored_repeat
+};
+
+// A GPU resource a node's GLSL function takes as a parameter (MaterialX's resource binding context): the emitter
+// declares it with a binding, lists it in GlslModule::resources, and hosts and tests bind from that manifest.
+struct ResourceSpec {
+    enum class Kind : uint8_t {
+        ImageFile,     // an image file with its colour space (texture.image)
+        DerivedImage,  // computed from a file on load (the LEAN moment pyramid)
+        BuiltinTable,  // a table built into Specula (the glint dictionary, later the LTC fits)
+    };
+    std::string name;      // the GLSL parameter name, e.g. "tex"
+    std::string glslType;  // sampler2D, sampler1DArray, ...
+    Kind kind = Kind::ImageFile;
+    std::string doc;
+    // The texels for a node instance, from its prepared data (PrepareFn result; null for built-in tables).
+    ResourceImage (*produce)(const void* prepared) = nullptr;
+    std::string fileInput, colorspaceInput;  // ImageFile/DerivedImage: the string inputs naming the file, its colour space
+};
+const char* resourceKindName(ResourceSpec::Kind k);
+
 struct Instr;
 struct EvalContext;
 // CPU entry of a node: reads its input registers, writes its output registers.
@@ -130,9 +164,6 @@ enum NodeFlags : uint32_t {
     kPure = 1u << 0,              // outputs depend only on inputs: folded when all inputs are constant
     kNeedsDerivatives = 1u << 1,  // reads screen-space differentials (sp.dpdx..., GLSL dFdx/dFdy)
     kEmissive = 1u << 2,          // can produce emission
-    kGlslShading = 1u << 3,       // GLSL function takes SpeculaShadingInputs s first
-    kGlslDirections = 1u << 4,    // GLSL function takes (vec3 wo, vec3 wi) world directions
-    kGlslTexture = 1u << 5,       // GLSL function takes a sampler2D (declared by the emitter)
 };
 
 struct NodeSpec {
@@ -141,6 +172,7 @@ struct NodeSpec {
     std::string category;  // family: constant, geometry, texture, math, convert, fresnel, bsdf, closure
     std::string doc;
     std::vector<PortSpec> inputs, outputs;
+    std::vector<ResourceSpec> resources;  // GPU resources of the GLSL function, in parameter-name order
     uint32_t flags = 0;
     CpuFn cpu = nullptr;
     PrepareFn prepare = nullptr;
@@ -156,7 +188,8 @@ struct NodeSpec {
     std::vector<std::string> outputNames() const;
     // GLSL source text of glslFile (embedded), or nullptr if missing.
     const std::string* glslSource() const;
-    // The GLSL prototype derived from the ports: "void fn(SpeculaShadingInputs, vec3, vec3, float, out vec3)".
+    // The GLSL prototype bound to the ports by name (codegen::bindGlslFunction), with parameter names:
+    // "void fn(SpeculaClosureQuery q, vec3 weight, ..., out SpeculaClosure bsdf)", or "(unbound: why)".
     std::string glslPrototype() const;
 };
 

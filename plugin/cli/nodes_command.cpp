@@ -5,6 +5,8 @@
 // compared byte for byte with a fresh run (tests/unit/test_nodes_doc.cpp).
 #include "plugin/cli/nodes_command.h"
 
+#include "core/codegen/glsl_signature.h"
+
 #include "core/graph/node_spec.h"
 #include "core/io/image_io.h"
 #include "core/util/error.h"
@@ -432,12 +434,23 @@ ojson nodeJson(const NodeSpec& s) {
     for (auto& p : s.outputs) out.push_back(portJson(p, false));
     j["inputs"] = in;
     j["outputs"] = out;
+    bool query = false, shading = false;
+    try {
+        for (const codegen::GlslArgRole& r : codegen::bindGlslFunction(s).roles) {
+            query |= r.kind == codegen::GlslArgRole::Query;
+            shading |= r.kind == codegen::GlslArgRole::Shading;
+        }
+    } catch (const std::exception&) {
+    }
     j["flags"] = {{"pure", s.has(kPure)},
                   {"needs_derivatives", s.has(kNeedsDerivatives)},
                   {"emissive", s.has(kEmissive)},
-                  {"glsl_shading", s.has(kGlslShading)},
-                  {"glsl_directions", s.has(kGlslDirections)},
-                  {"glsl_texture", s.has(kGlslTexture)}};
+                  {"glsl_query", query},
+                  {"glsl_shading", shading}};
+    ojson res = ojson::array();
+    for (const ResourceSpec& r : s.resources)
+        res.push_back({{"name", r.name}, {"glsl_type", r.glslType}, {"kind", resourceKindName(r.kind)}, {"doc", r.doc}});
+    j["resources"] = res;
     j["glsl"] = {{"function", s.glslFunction},
                  {"file", s.glslFile.empty() ? std::string() : "nodes/" + s.glslFile},
                  {"prototype", s.glslPrototype()}};

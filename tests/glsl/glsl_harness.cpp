@@ -2,6 +2,8 @@
 #define GL_GLEXT_PROTOTYPES 1
 #include "glsl_harness.h"
 
+#include "core/codegen/glsl_signature.h"
+
 #include <EGL/egl.h>
 #include <EGL/eglext.h>
 #include <GL/gl.h>
@@ -153,24 +155,55 @@ std::vector<float> glRun(unsigned program, int w, int h, const std::function<voi
 }
 
 std::string nodeCall(const graph::NodeSpec& spec, const std::function<std::string(int)>& inputExpr,
-                     const std::vector<std::string>& outVars, const std::string& sampler) {
-    using namespace graph;
-    std::vector<std::string> args;
-    if (spec.has(kGlslShading)) args.push_back("s");
-    if (spec.has(kGlslDirections)) {
-        args.push_back("wo");
-        args.push_back("wi");
+                     const std::vector<std::string>& outVars, const std::vector<std::string>& resourceVars) {
+    using codegen::GlslArgRole;
+    return codegen::glslNodeCall(spec, [&](const GlslArgRole& r) -> std::string {
+        switch (r.kind) {
+            case GlslArgRole::Query: return "q";
+            case GlslArgRole::Shading: return "s";
+            case GlslArgRole::Input: return inputExpr(r.index);
+            case GlslArgRole::Output: return outVars.at(size_t(r.index));
+            case GlslArgRole::Resource: return resourceVars.at(size_t(r.index));
+        }
+        return "";
+    });
+}
+
+namespace {
+GLenum glFilter(const std::string& f) {
+    if (f == "nearest") return GL_NEAREST;
+    if (f == "linear") return GL_LINEAR;
+    if (f == "nearest_mipmap_nearest") return GL_NEAREST_MIPMAP_NEAREST;
+    if (f == "linear_mipmap_nearest") return GL_LINEAR_MIPMAP_NEAREST;
+    if (f == "nearest_mipmap_linear") return GL_NEAREST_MIPMAP_LINEAR;
+    return GL_LINEAR_MIPMAP_LINEAR;
+}
+GLenum glWrap(const std::string& w) {
+    if (w == "clamp_to_edge") return GL_CLAMP_TO_EDGE;
+    if (w == "mirrored_repeat") return GL_MIRRORED_REPEAT;
+    return GL_REPEAT;
+}
+}  // namespace
+
+GlTexture glResourceTexture(const graph::ResourceImage& img, const std::string& glslType) {
+    GlTexture t;
+    t.target = glslType == "sampler1DArray" ? GL_TEXTURE_1D_ARRAY : GL_TEXTURE_2D;
+    glGenTextures(1, &t.name);
+    glBindTexture(t.target, t.name);
+    for (size_t l = 0; l < img.levels.size(); ++l)
+        glTexImage2D(t.target, GLint(l), GL_RGBA32F, img.levels[l].width, img.levels[l].height, 0, GL_RGBA, GL_FLOAT,
+                     img.levels[l].rgba.data());
+    if (img.generateMipmaps) {
+        glGenerateMipmap(t.target);
+    } else {
+        glTexParameteri(t.target, GL_TEXTURE_BASE_LEVEL, 0);
+        glTexParameteri(t.target, GL_TEXTURE_MAX_LEVEL, GLint(img.levels.size()) - 1);
     }
-    if (spec.has(kGlslTexture)) args.push_back(sampler);
-    for (size_t k = 0; k < spec.inputs.size(); ++k) {
-        const PortSpec& p = spec.inputs[k];
-        if (p.type == TypeDesc::String && p.enumValues.empty()) continue;
-        args.push_back(inputExpr(int(k)));
-    }
-    for (auto& o : outVars) args.push_back(o);
-    std::string s = spec.glslFunction + "(";
-    for (size_t i = 0; i < args.size(); ++i) s += (i ? ", " : "") + args[i];
-    return s + ")";
+    glTexParameteri(t.target, GL_TEXTURE_MIN_FILTER, GLint(glFilter(img.minFilter)));
+    glTexParameteri(t.target, GL_TEXTURE_MAG_FILTER, GLint(glFilter(img.magFilter)));
+    glTexParameteri(t.target, GL_TEXTURE_WRAP_S, GLint(glWrap(img.wrapS)));
+    if (t.target == GL_TEXTURE_2D) glTexParameteri(t.target, GL_TEXTURE_WRAP_T, GLint(glWrap(img.wrapT)));
+    return t;
 }
 
 }  // namespace specula::glsltest

@@ -25,9 +25,17 @@ unsigned glDataTexture(int w, int h, const std::vector<float>& rgba);
 // Draws 'program' into a w*h RGBA32F target and reads back w*h*4 floats (row 0 = y 0).
 std::vector<float> glRun(unsigned program, int w, int h, const std::function<void()>& bind = {});
 
-// "fn(args...)" for a node: inputExpr(k) gives the GLSL expression of input port k (numeric, enum or
-// closure), outVars the output variables; the shading/direction/sampler arguments come first.
+// "fn(args...)" for a node, its parameters bound by name (codegen::glslNodeCall): inputExpr(k) gives the GLSL
+// expression of input port k (numeric, enum or closure), outVars the output variables, resourceVars the uniforms of
+// the node's resources (NodeSpec::resources order); the query is 'q' and the shading inputs 's'.
 std::string nodeCall(const graph::NodeSpec& spec, const std::function<std::string(int)>& inputExpr,
-                     const std::vector<std::string>& outVars, const std::string& sampler = "spc_test_tex");
+                     const std::vector<std::string>& outVars, const std::vector<std::string>& resourceVars = {});
+
+// A texture made from a resource's texels and sampler state (graph::ResourceImage), of the target its GLSL type
+// needs (sampler2D: GL_TEXTURE_2D, sampler1DArray: GL_TEXTURE_1D_ARRAY). Bind it at the resource's binding.
+struct GlTexture {
+    unsigned name = 0, target = 0;
+};
+GlTexture glResourceTexture(const graph::ResourceImage& image, const std::string& glslType);
 
 }  // namespace specula::glsltest

@@ -2,6 +2,7 @@
 // PortSpecs inside a test main, compiles with glslangValidator -S frag; so does the module emitted
 // for every test and example material.
 #include "core/codegen/glsl_emitter.h"
+#include "core/codegen/glsl_signature.h"
 #include "core/codegen/glsl_sources.h"
 #include "core/graph/graph.h"
 #include "glsl_harness.h"
@@ -20,19 +21,24 @@ namespace {
 
 std::string literalOf(const PortSpec& p) {
     if (p.type == TypeDesc::Closure) return "spc_test_closure";
-    if (p.type == TypeDesc::String) return "0";
+    if (p.type == TypeDesc::String) return codegen::glslEnumConstant(p, 0);
     return codegen::glslLiteral(p.type, p.def);
 }
 
 // A fragment shader calling 'spec' once with its defaults.
 std::string nodeTestShader(const NodeSpec& spec) {
-    std::string src = "#version 450\n" + codegen::glslPrelude() + *spec.glslSource() + "\n";
-    src += "layout(location = 0) out vec4 spc_out;\nlayout(binding = 0) uniform sampler2D spc_test_tex;\n";
+    std::string src = "#version 450\n" + codegen::glslPrelude() + codegen::glslEnumConstants(spec) + *spec.glslSource() + "\n";
+    src += "layout(location = 0) out vec4 spc_out;\n";
+    std::vector<std::string> resources;
+    for (size_t r = 0; r < spec.resources.size(); ++r) {
+        resources.push_back("spc_test_res" + std::to_string(r));
+        src += "layout(binding = " + std::to_string(r) + ") uniform " + spec.resources[r].glslType + " " + resources.back() + ";\n";
+    }
     src += "void main() {\n";
     src += "    SpeculaShadingInputs s = specula_shading_inputs(gl_FragCoord.xyz, vec3(0.0, 0.0, 1.0), vec3(0.0, 0.0, 1.0),\n"
            "                                                    vec4(1.0, 0.0, 0.0, 1.0), gl_FragCoord.xy / 64.0);\n";
-    src += "    vec3 wo = vec3(0.0, 0.0, 1.0), wi = normalize(vec3(0.3, 0.1, 1.0));\n";
-    src += "    SpeculaClosure spc_test_closure;\n    spc_test_closure.f = vec3(0.25);\n    spc_test_closure.emission = vec3(0.0);\n";
+    src += "    SpeculaClosureQuery q = specula_direction_query(vec3(0.0, 0.0, 1.0), normalize(vec3(0.3, 0.1, 1.0)), 1.0 / 0.0);\n";
+    src += "    SpeculaClosure spc_test_closure = spc_closure_none();\n    spc_test_closure.f = vec3(0.25);\n";
     std::vector<std::string> outs;
     std::string sum = "vec4(0.0)";
     for (size_t k = 0; k < spec.outputs.size(); ++k) {
@@ -46,7 +52,7 @@ std::string nodeTestShader(const NodeSpec& spec) {
             default: sum += " + vec4(" + v + ", 0.0)"; break;
         }
     }
-    src += "    " + glsltest::nodeCall(spec, [&](int k) { return literalOf(spec.inputs[k]); }, outs) + ";\n";
+    src += "    " + glsltest::nodeCall(spec, [&](int k) { return literalOf(spec.inputs[k]); }, outs, resources) + ";\n";
     src += "    spc_out = " + sum + ";\n}\n";
     return src;
 }

@@ -5,6 +5,7 @@
 // material module end to end (uniform block, bindings, specula_eval) and dFdx-based derivatives.
 #define GL_GLEXT_PROTOTYPES 1
 #include "core/codegen/glsl_emitter.h"
+#include "core/codegen/glsl_signature.h"
 #include "tests/unit/test_support.h"
 #include "core/codegen/glsl_sources.h"
 #include "core/color/color_config.h"
@@ -36,12 +37,12 @@ namespace {
 constexpr int kSide = 32, kSamples = kSide * kSide;
 constexpr float kRelFloor = 1e-3f;
 constexpr int kGeom = 31;  // P3 N3 Ng3 T4 uv2 dPdx3 dPdy3 duvdx2 duvdy2 dNdx3 dNdy3
+// Then wo3 wi3 dwodx3 dwody3 and the light distance (0: a direction, +inf).
+constexpr int kQuery = kGeom + 13;
 
 struct Fixture {
     std::string dir;
     std::shared_ptr<TextureStore> store;
-    TextureHandle tex;
-    unsigned glTex = 0;
 };
 
 Fixture& fixture() {
@@ -69,73 +70,7 @@ Fixture& fixture() {
     out->write_image(OIIO::TypeDesc::FLOAT, px.data());
     out->close();
     f.store = std::make_shared<TextureStore>(ColorConfig::load("builtin"));
-    f.tex = f.store->load(file, "raw");
     return f;
-}
-
-// GL texture with the TextureStore's pixels: rows flipped to bottom-up, expanded to RGBA, MIP-mapped.
-unsigned uploadStoreTexture() {
-    Fixture& f = fixture();
-    if (f.glTex) return f.glTex;
-    int w = f.store->width(f.tex), h = f.store->height(f.tex), c = f.store->channels(f.tex);
-    const auto& src = f.store->pixels(f.tex);
-    std::vector<float> rgba(size_t(w) * h * 4);
-    for (int y = 0; y < h; ++y)
-        for (int x = 0; x < w; ++x)
-            for (int k = 0; k < 4; ++k) {
-                const float* p = &src[(size_t(h - 1 - y) * w + x) * c];
-                rgba[(size_t(y) * w + x) * 4 + k] = k < c ? p[k] : (k == 3 ? 1.f : p[c - 1]);
-            }
-    glGenTextures(1, &f.glTex);
-    glBindTexture(GL_TEXTURE_2D, f.glTex);
-    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, w, h, 0, GL_RGBA, GL_FLOAT, rgba.data());
-    glGenerateMipmap(GL_TEXTURE_2D);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_REPEAT);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_REPEAT);
-    return f.glTex;
-}
-
-// The glint dictionary as bsdf.glint's GLSL expects it (nodes/bsdf/glint/glint.glsl header): unit 15,
-// GL_TEXTURE_1D_ARRAY RGBA32F with our box MIP chain, mirrored repeat on s, trilinear.
-unsigned uploadGlintDictionary() {
-    static unsigned tex = 0;
-    if (tex) return tex;
-    const glint::Dictionary& d = glint::Dictionary::instance();
-    glGenTextures(1, &tex);
-    glBindTexture(GL_TEXTURE_1D_ARRAY, tex);
-    for (int m = 0; m < glint::kMips; ++m)
-        glTexImage2D(GL_TEXTURE_1D_ARRAY, m, GL_RGBA32F, glint::mipRes(m), glint::Dictionary::kGpuLayers, 0, GL_RGBA, GL_FLOAT,
-                     d.gpuMipRgba(m).data());
-    glTexParameteri(GL_TEXTURE_1D_ARRAY, GL_TEXTURE_BASE_LEVEL, 0);
-    glTexParameteri(GL_TEXTURE_1D_ARRAY, GL_TEXTURE_MAX_LEVEL, glint::kMips - 1);
-    glTexParameteri(GL_TEXTURE_1D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
-    glTexParameteri(GL_TEXTURE_1D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-    glTexParameteri(GL_TEXTURE_1D_ARRAY, GL_TEXTURE_WRAP_S, GL_MIRRORED_REPEAT);
-    return tex;
-}
-
-// texture.lean's sampler: the LEAN moment pyramid of the same store image, in LeanPyramid's GLSL layout
-// (core/texture/lean_moments.h glslPackedLevel: all levels uploaded, read with texelFetch).
-unsigned uploadLeanTexture() {
-    static unsigned tex = 0;
-    if (tex) return tex;
-    Fixture& f = fixture();
-    LeanPyramid P = LeanPyramid::fromEncodedPixels(f.store->pixels(f.tex).data(), f.store->width(f.tex),
-                                                   f.store->height(f.tex), f.store->channels(f.tex), false);
-    glGenTextures(1, &tex);
-    glBindTexture(GL_TEXTURE_2D, tex);
-    for (int l = 0; l < P.glslLevels(); ++l) {
-        int w, h;
-        P.glslLevelSize(l, w, h);
-        glTexImage2D(GL_TEXTURE_2D, l, GL_RGBA32F, w, h, 0, GL_RGBA, GL_FLOAT, P.glslPackedLevel(l).data());
-    }
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_BASE_LEVEL, 0);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, P.glslLevels() - 1);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST_MIPMAP_NEAREST);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-    return tex;
 }
 
 Vec3 randUnit(std::mt19937& rng) {
@@ -144,6 +79,18 @@ Vec3 randUnit(std::mt19937& rng) {
     do v = Vec3(n(rng), n(rng), n(rng));
     while (glm::dot(v, v) < 1e-4f);
     return glm::normalize(v);
+}
+
+// The string inputs of a node with resources: the fixture image for the inputs its resources read the file and colour
+// space from (ResourceSpec::fileInput / colorspaceInput), the default of every other string (enums: their first value).
+std::vector<std::string> resourceStrings(const NodeSpec& s) {
+    std::vector<std::string> v(s.inputs.size());
+    for (size_t k = 0; k < s.inputs.size(); ++k) v[k] = s.inputs[k].defString;
+    for (const ResourceSpec& r : s.resources) {
+        if (!r.fileInput.empty()) v[size_t(s.inputIndex(r.fileInput))] = "grid.exr";
+        if (!r.colorspaceInput.empty()) v[size_t(s.inputIndex(r.colorspaceInput))] = "raw";
+    }
+    return v;
 }
 
 // Sampling range of an input for the parity grid (documented in docs/nodes.md).
@@ -162,7 +109,7 @@ struct Layout {
 
 Layout layoutFor(const NodeSpec& s) {
     Layout L;
-    L.floats = kGeom + 6;
+    L.floats = kQuery;
     for (auto& p : s.inputs) {
         int w = p.type == TypeDesc::Closure ? 3 : p.type == TypeDesc::String ? (p.enumValues.empty() ? 0 : 1) : typeWidth(p.type);
         L.inOffset.push_back(w ? L.floats : -1);
@@ -173,13 +120,18 @@ Layout layoutFor(const NodeSpec& s) {
 }
 
 std::string parityShader(const NodeSpec& s, const Layout& L) {
-    std::string src = "#version 450\n" + codegen::glslPrelude() + *s.glslSource() + "\n";
+    std::string src = "#version 450\n" + codegen::glslPrelude() + codegen::glslEnumConstants(s) + *s.glslSource() + "\n";
     bool closures = false;
     for (auto& p : s.inputs) closures |= p.type == TypeDesc::Closure;
     const NodeSpec* diffuse = NodeRegistry::instance().find("bsdf.diffuse");
     if (closures && s.glslFile != diffuse->glslFile) src += *diffuse->glslSource() + "\n";
+    // The node's resources at bindings 1, 2, ... (binding 0 holds the data), bound from their ResourceImages.
+    std::vector<std::string> resources;
+    for (size_t r = 0; r < s.resources.size(); ++r) {
+        resources.push_back("spc_res" + std::to_string(r));
+        src += "layout(binding = " + std::to_string(r + 1) + ") uniform " + s.resources[r].glslType + " " + resources.back() + ";\n";
+    }
     src += R"(layout(binding = 0) uniform sampler2D spc_data;
-layout(binding = 1) uniform sampler2D spc_test_tex;
 layout(location = 0) out vec4 spc_out;
 float spc_in(int i) { return texelFetch(spc_data, ivec2(i >> 2, int(gl_FragCoord.y)), 0)[i & 3]; }
 vec2 spc_in2(int i) { return vec2(spc_in(i), spc_in(i + 1)); }
@@ -190,7 +142,9 @@ void main() {
     s.tangent = vec4(spc_in3(9), spc_in(12)); s.uv = spc_in2(13);
     s.dPdx = spc_in3(15); s.dPdy = spc_in3(18); s.duvdx = spc_in2(21); s.duvdy = spc_in2(23);
     s.dNdx = spc_in3(25); s.dNdy = spc_in3(28);
-    vec3 wo = spc_in3(31), wi = spc_in3(34);
+    s.dwodx = spc_in3(37); s.dwody = spc_in3(40);
+    float light_distance = spc_in(43) > 0.0 ? spc_in(43) : 1.0 / 0.0;
+    SpeculaClosureQuery q = specula_direction_query(spc_in3(31), spc_in3(34), light_distance);
 )";
     auto expr = [&](int k) -> std::string {
         const PortSpec& p = s.inputs[k];
@@ -205,14 +159,20 @@ void main() {
     };
     for (size_t k = 0; k < s.inputs.size(); ++k)
         if (s.inputs[k].type == TypeDesc::Closure)
-            src += "    SpeculaClosure spc_cin" + std::to_string(k) + ";\n    spc_bsdf_diffuse(wo, wi, spc_in3(" +
-                   std::to_string(L.inOffset[k]) + "), s.normal, s.tangent.xyz, spc_cin" + std::to_string(k) + ");\n";
+        {
+            const std::string v = "spc_cin" + std::to_string(k), color = "spc_in3(" + std::to_string(L.inOffset[k]) + ")";
+            src += "    SpeculaClosure " + v + ";\n    " +
+                   glsltest::nodeCall(*diffuse, [&](int p) { return diffuse->inputs[size_t(p)].name == "color" ? color
+                                                             : diffuse->inputs[size_t(p)].name == "normal" ? std::string("s.normal")
+                                                                                                           : std::string("s.tangent.xyz"); },
+                                      {v}) + ";\n";
+        }
     std::vector<std::string> outs;
     for (size_t k = 0; k < s.outputs.size(); ++k) {
         outs.push_back("o" + std::to_string(k));
         src += std::string("    ") + glslTypeName(s.outputs[k].type) + " " + outs.back() + ";\n";
     }
-    src += "    " + glsltest::nodeCall(s, expr, outs) + ";\n";
+    src += "    " + glsltest::nodeCall(s, expr, outs, resources) + ";\n";
     src += "    float r[" + std::to_string(L.outFloats + 4) + "];\n";
     int m = 0;
     for (size_t k = 0; k < s.outputs.size(); ++k) {
@@ -265,7 +225,8 @@ ParityResult runParity(const NodeSpec& s, std::string* failure) {
             } else if (p.type == TypeDesc::String) {
                 // Neighbouring pixels of the parity grid hold unrelated samples, so screen-space finite
                 // differences are meaningless there: quad-derivative modes are pinned to their first value.
-                d[o] = (s.id == "texture.image" || p.name == "derivatives") ? 0.f : float(j % int(p.enumValues.size()));
+                // Uniform ports (sampler state, derivative modes) keep their default for the whole grid.
+                d[o] = p.uniform ? 0.f : float(j % int(p.enumValues.size()));
             } else if (p.type == TypeDesc::Normal3 || (p.type == TypeDesc::Vector3 && p.binding == GeomBinding::T)) {
                 put3(o, randUnit(rng));
             } else {
@@ -281,6 +242,8 @@ ParityResult runParity(const NodeSpec& s, std::string* failure) {
             if (glm::dot(w, ref) < 0.f && u01(rng) < 0.85f) w = -w;
             put3(o, w);
         }
+        for (int k = kGeom + 6; k < kGeom + 12; ++k) d[k] = rnd(-0.05f, 0.05f);  // dwo/dx, dwo/dy
+        d[kGeom + 12] = j % 2 ? rnd(1.f, 5.f) : 0.f;                              // point light or direction
     }
     // GPU
     int texW = (L.floats + 3) / 4, outW = (L.outFloats + 3) / 4;
@@ -294,23 +257,24 @@ ParityResult runParity(const NodeSpec& s, std::string* failure) {
         return res;
     }
     unsigned dataTex = glsltest::glDataTexture(texW, kSamples, packed);
-    unsigned imgTex = s.id == "texture.lean" ? uploadLeanTexture() : s.has(kGlslTexture) ? uploadStoreTexture() : 0;
-    unsigned glintTex = s.glslSource()->find("spc_glint_dictionary") != std::string::npos ? uploadGlintDictionary() : 0;
+    // The node's resources, produced from its prepared data exactly as the CPU program prepares it.
+    GraphLoadContext load{s.resources.empty() ? nullptr : fixture().store.get(), fixture().dir};
+    std::vector<glsltest::GlTexture> resourceTex;
+    for (const graph::ResourceImage& img : codegen::nodeResourceImages(s, resourceStrings(s), std::vector<std::string>(s.inputs.size()), load))
+        resourceTex.push_back(glsltest::glResourceTexture(img, s.resources[resourceTex.size()].glslType));
     std::vector<float> gpu = glsltest::glRun(prog, outW, kSamples, [&] {
         glActiveTexture(GL_TEXTURE0);
         glBindTexture(GL_TEXTURE_2D, dataTex);
-        glActiveTexture(GL_TEXTURE1);
-        glBindTexture(GL_TEXTURE_2D, imgTex);
-        if (glintTex) {
-            glActiveTexture(GL_TEXTURE15);
-            glBindTexture(GL_TEXTURE_1D_ARRAY, glintTex);
+        for (size_t r = 0; r < resourceTex.size(); ++r) {
+            glActiveTexture(GLenum(GL_TEXTURE1 + r));
+            glBindTexture(resourceTex[r].target, resourceTex[r].name);
         }
     });
     glDeleteTextures(1, &dataTex);
+    for (auto& t : resourceTex) glDeleteTextures(1, &t.name);
     glDeleteProgram(prog);
 
     // CPU
-    GraphLoadContext load{s.has(kGlslTexture) ? fixture().store.get() : nullptr, fixture().dir};
     ScratchArena arena;
     for (int j = 0; j < kSamples; ++j) {
         const float* d = data[j].data();
@@ -321,8 +285,7 @@ ParityResult runParity(const NodeSpec& s, std::string* failure) {
             int o = L.inOffset[k];
             if (p.type == TypeDesc::String) {
                 if (o >= 0) inputs[p.name] = p.enumValues[int(d[o])];
-                else if (p.name == "file") inputs[p.name] = "grid.exr";
-                else if (p.name == "colorspace") inputs[p.name] = "raw";
+                else if (!resourceStrings(s)[k].empty()) inputs[p.name] = resourceStrings(s)[k];
                 continue;
             }
             if (p.type == TypeDesc::Closure) {
@@ -347,6 +310,8 @@ ParityResult runParity(const NodeSpec& s, std::string* failure) {
         sp.uv = Vec2(d[13], d[14]);
         sp.dpdx = v3(15), sp.dpdy = v3(18), sp.duvdx = Vec2(d[21], d[22]), sp.duvdy = Vec2(d[23], d[24]);
         sp.dndx = v3(25), sp.dndy = v3(28);
+        sp.dwodx = v3(kGeom + 6), sp.dwody = v3(kGeom + 9);
+        const float lightDistance = d[kGeom + 12] > 0.f ? d[kGeom + 12] : std::numeric_limits<float>::infinity();
         sp.hasDifferentials = true;
         sp.frame = Frame::fromNormal(sp.n);
         Vec3 wo = v3(kGeom), wi = v3(kGeom + 3);
@@ -357,7 +322,7 @@ ParityResult runParity(const NodeSpec& s, std::string* failure) {
         std::vector<float> cpu;
         for (size_t k = 0; k < s.outputs.size(); ++k) {
             if (s.outputs[k].type == TypeDesc::Closure) {
-                Color3 f = test::query(cl, wo, wi).f.total();
+                Color3 f = test::query(cl, wo, wi, lightDistance).f.total();
                 cpu.insert(cpu.end(), {f.x, f.y, f.z, em.x, em.y, em.z});
             } else {
                 for (int c = 0; c < typeWidth(s.outputs[k].type); ++c) cpu.push_back(r[prog.rootRegister(k) + c]);
@@ -465,6 +430,7 @@ void main() {
     s.position = a.xyz; s.normal = vec3(a.w, b.xy); s.tangent = vec4(b.zw, c.x, 1.0);
     s.geometric_normal = s.normal; s.uv = c.yz;
     s.dPdx = vec3(0.0); s.dPdy = vec3(0.0); s.duvdx = vec2(0.0); s.duvdy = vec2(0.0); s.dNdx = vec3(0.0); s.dNdy = vec3(0.0);
+    s.dwodx = vec3(0.0); s.dwody = vec3(0.0);
     vec3 wo = d.xyz, wi = vec3(d.w, e.xy);
     spc_out = int(gl_FragCoord.x) == 0 ? vec4(specula_eval(s, wo, wi), 0.0) : vec4(specula_emission(s, wo), 0.0);
 }

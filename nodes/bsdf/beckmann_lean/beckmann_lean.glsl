@@ -23,10 +23,13 @@ float spc_lean_lambda(vec3 w, vec2 mean, float a, float b, float c) {
     }
     return max(ap / w.z - 1.0, 0.0);
 }
-void spc_bsdf_beckmann_lean(vec3 wo, vec3 wi, vec3 weight, float roughness, vec2 slope, vec3 covariance, int fresnel,
+void spc_bsdf_beckmann_lean(SpeculaClosureQuery q, vec3 weight, float roughness, vec2 slope, vec3 covariance, int fresnel,
                             vec3 f0, float ior, vec3 eta, vec3 k, vec3 normal, vec3 tangent, out SpeculaClosure bsdf) {
-    bsdf.f = vec3(0.0);
-    bsdf.emission = vec3(0.0);
+    bsdf = spc_closure_none();
+    if (q.kind != SPC_QUERY_DIRECTION) {  // no closed form over polygons: the host samples this lobe
+        bsdf.partial = true;
+        return;
+    }
     // makeSlopeGaussian: PSD projection of the LEAN covariance, plus α²/2 per axis (α = roughness², >= 1e-3).
     float xx = max(covariance.x, 0.0), yy = max(covariance.y, 0.0);
     float lim = sqrt(xx * yy);
@@ -36,19 +39,19 @@ void spc_bsdf_beckmann_lean(vec3 wo, vec3 wi, vec3 weight, float roughness, vec2
     float a = xx + v, b = yy + v, c = xy;
     float det = a * b - c * c;
     vec3 o, i, h;
-    if (!spc_reflection_local(wo, wi, normal, tangent, o, i, h)) return;
+    if (!spc_reflection_local(q.wo, q.wi, normal, tangent, o, i, h)) return;
     if (h.z <= 0.0) return;
     float z2 = h.z * h.z;
     float dx = -h.x / h.z - slope.x, dy = -h.y / h.z - slope.y;
-    float q = (b * dx * dx - 2.0 * c * dx * dy + a * dy * dy) / det;
-    float d = exp(-0.5 * q) / (2.0 * SPC_PI * sqrt(det)) / (z2 * z2);
+    float qf = (b * dx * dx - 2.0 * c * dx * dy + a * dy * dy) / det;
+    float d = exp(-0.5 * qf) / (2.0 * SPC_PI * sqrt(det)) / (z2 * z2);
     if (d == 0.0) return;
     float g = 1.0 / (1.0 + spc_lean_lambda(o, slope, a, b, c) + spc_lean_lambda(i, slope, a, b, c));
     float val = d * g / (4.0 * o.z);
     float cw = dot(o, h);
     vec3 F = vec3(1.0);
-    if (fresnel == 0) F = spc_fresnel_schlick(cw, f0);
-    else if (fresnel == 1) F = vec3(spc_fresnel_dielectric(cw, ior));
-    else if (fresnel == 2) F = vec3(spc_fresnel_conductor(cw, eta.x, k.x), spc_fresnel_conductor(cw, eta.y, k.y), spc_fresnel_conductor(cw, eta.z, k.z));
+    if (fresnel == SPC_FRESNEL_SCHLICK) F = spc_fresnel_schlick(cw, f0);
+    else if (fresnel == SPC_FRESNEL_DIELECTRIC) F = vec3(spc_fresnel_dielectric(cw, ior));
+    else if (fresnel == SPC_FRESNEL_CONDUCTOR) F = vec3(spc_fresnel_conductor(cw, eta.x, k.x), spc_fresnel_conductor(cw, eta.y, k.y), spc_fresnel_conductor(cw, eta.z, k.z));
     bsdf.f = weight * (F * val);
 }

@@ -52,7 +52,6 @@ void reg(NodeRegistry& r) {
             "(e.g. from texture.lean) plus the material roughness as (alpha^2/2) I; Smith G2 of the shifted Gaussian.";
     s.inputs = kParams.ports();
     s.outputs = kOutputs.ports();
-    s.flags = kGlslDirections;
     s.cpu = &cpu;
     s.glslFunction = "spc_bsdf_beckmann_lean";
     s.glslFile = "bsdf/beckmann_lean/beckmann_lean.glsl";

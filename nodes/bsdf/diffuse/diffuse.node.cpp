@@ -30,7 +30,6 @@ void reg(NodeRegistry& r) {
     s.doc = "Lambertian diffuse reflection, f = color/π.";
     s.inputs = kParams.ports();
     s.outputs = kOutputs.ports();
-    s.flags = kGlslDirections;
     s.cpu = &cpu;
     s.glslFunction = "spc_bsdf_diffuse";
     s.glslFile = "bsdf/diffuse/diffuse.glsl";

@@ -1,5 +1,5 @@
 // bsdf.emission: no scattering; emission = color * strength.
 void spc_bsdf_emission(vec3 color, float strength, out SpeculaClosure bsdf) {
-    bsdf.f = vec3(0.0);
+    bsdf = spc_closure_none();
     bsdf.emission = color * strength;
 }

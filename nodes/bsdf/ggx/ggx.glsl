@@ -13,21 +13,24 @@ float spc_ggx_lambda(vec3 w, float ax, float ay) {
     float a2tan2 = (px * px + py * py) / z2;
     return 0.5 * (-1.0 + sqrt(1.0 + a2tan2));
 }
-void spc_bsdf_ggx(vec3 wo, vec3 wi, vec3 weight, float roughness, float anisotropy, int fresnel, vec3 f0, float ior,
+void spc_bsdf_ggx(SpeculaClosureQuery q, vec3 weight, float roughness, float anisotropy, int fresnel, vec3 f0, float ior,
                   vec3 eta, vec3 k, vec3 normal, vec3 tangent, out SpeculaClosure bsdf) {
-    bsdf.f = vec3(0.0);
-    bsdf.emission = vec3(0.0);
+    bsdf = spc_closure_none();
+    if (q.kind != SPC_QUERY_DIRECTION) {  // no closed form over polygons: the host samples this lobe
+        bsdf.partial = true;
+        return;
+    }
     float alpha = roughness * roughness;
     float aspect = sqrt(max(1.0 - 0.9 * anisotropy, 0.0));
     float ax = max(alpha / aspect, 1e-4), ay = max(alpha * aspect, 1e-4);
     vec3 o, i, h;
-    if (!spc_reflection_local(wo, wi, normal, tangent, o, i, h)) return;
+    if (!spc_reflection_local(q.wo, q.wi, normal, tangent, o, i, h)) return;
     float d = spc_ggx_ndf(h, ax, ay);
     float g = 1.0 / (1.0 + spc_ggx_lambda(o, ax, ay) + spc_ggx_lambda(i, ax, ay));
     float c = dot(o, h);
     vec3 F = vec3(1.0);
-    if (fresnel == 0) F = spc_fresnel_schlick(c, f0);
-    else if (fresnel == 1) F = vec3(spc_fresnel_dielectric(c, ior));
-    else if (fresnel == 2) F = vec3(spc_fresnel_conductor(c, eta.x, k.x), spc_fresnel_conductor(c, eta.y, k.y), spc_fresnel_conductor(c, eta.z, k.z));
+    if (fresnel == SPC_FRESNEL_SCHLICK) F = spc_fresnel_schlick(c, f0);
+    else if (fresnel == SPC_FRESNEL_DIELECTRIC) F = vec3(spc_fresnel_dielectric(c, ior));
+    else if (fresnel == SPC_FRESNEL_CONDUCTOR) F = vec3(spc_fresnel_conductor(c, eta.x, k.x), spc_fresnel_conductor(c, eta.y, k.y), spc_fresnel_conductor(c, eta.z, k.z));
     bsdf.f = weight * (F * (d * g / (4.0 * o.z)));
 }

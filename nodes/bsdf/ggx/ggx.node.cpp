@@ -47,7 +47,6 @@ void reg(NodeRegistry& r) {
     s.doc = "Anisotropic GGX reflection, height-correlated Smith masking-shadowing (Heitz 2014, Eq. 99), unfiltered.";
     s.inputs = kParams.ports();
     s.outputs = kOutputs.ports();
-    s.flags = kGlslDirections;
     s.cpu = &cpu;
     s.glslFunction = "spc_bsdf_ggx";
     s.glslFile = "bsdf/ggx/ggx.glsl";

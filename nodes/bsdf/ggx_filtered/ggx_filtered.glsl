@@ -1,11 +1,8 @@
 // bsdf.ggx_filtered: the GLSL twin of FilteredGgxLobe::eval (nodes/bsdf/ggx_filtered/filtered_ggx.h): GGX with a
 // roughness matrix A = [[a, c], [c, d]] (vec3(a, c, d)) filtered per pixel (Tokuyoshi & Kaplanyan 2021, "TK21").
 // Derivative sources: "quad" = dFdxFine/dFdyFine of q in the fragment shader (GL 4.5); "analytic" = the chain rule of
-// filtered-ggx.md §5.1 from s.dNdx/s.dNdy and the view/light direction derivatives below, which SpeculaShadingInputs
-// does not carry: a host sets them before specula_eval (rasteriser: dFdxFine(wo)...; ray tracer: its differentials).
-// Zero (the default) means an orthographic view and a directional light.
-vec3 spc_ggxf_dwo_dx = vec3(0.0), spc_ggxf_dwo_dy = vec3(0.0);
-vec3 spc_ggxf_dwi_dx = vec3(0.0), spc_ggxf_dwi_dy = vec3(0.0);
+// filtered-ggx.md §5.1 from s.dNdx/s.dNdy, the view-direction derivatives s.dwodx/s.dwody and, for a point light at
+// q.light_distance, dwi = -(I - wi wi^T) dP / distance (a directional light, distance +inf, has dwi = 0).
 
 // TK21 Eq. 1 with the A.4 clamp: D(h) = 1 / (π sqrt(max(det A, τ)) (h⊥ᵀ adj(A) h⊥ / max(det A, τ) + h_z²)²)
 float spc_ggxf_ndf(vec3 h, vec3 A, float tau) {
@@ -33,7 +30,7 @@ vec3 spc_ggxf_kernel(vec2 du, vec2 dv, float sigma2) {
 }
 // Eq. 2 / Eq. 9 (full kernel) and Listing 3 (axis-aligned: κ clamp, saturate).
 vec3 spc_ggxf_additive(vec3 A, vec2 du, vec2 dv, int kernel, float sigma2, float kappa) {
-    if (kernel == 1) return A + 2.0 * spc_ggxf_kernel(du, dv, sigma2);
+    if (kernel == SPC_GGXF_KERNEL_FULL) return A + 2.0 * spc_ggxf_kernel(du, dv, sigma2);
     vec2 w = abs(du) + abs(dv);
     vec2 k = min(2.0 * sigma2 * w * w, vec2(kappa));
     return vec3(clamp(A.x + k.x, 0.0, 1.0), A.y, clamp(A.z + k.y, 0.0, 1.0));
@@ -41,7 +38,7 @@ vec3 spc_ggxf_additive(vec3 A, vec2 du, vec2 dv, int kernel, float sigma2, float
 // TK21 Eqs. 4–7 in the App. D form: B = A (I − A)⁻¹, B̄ = B + K, d = max(det B̄, det B), M = B̄/d + I, Ā = M/max(det M, 1).
 vec3 spc_ggxf_projected(vec3 A, vec2 du, vec2 dv, int kernel, float sigma2, float kappa) {
     vec3 K;
-    if (kernel == 1) {
+    if (kernel == SPC_GGXF_KERNEL_FULL) {
         K = 2.0 * spc_ggxf_kernel(du, dv, sigma2);
     } else {
         vec2 w = abs(du) + abs(dv);
@@ -60,12 +57,12 @@ vec3 spc_ggxf_projected(vec3 A, vec2 du, vec2 dv, int kernel, float sigma2, floa
     return M / max(spc_ggxf_det(M), 1.0);
 }
 // TK21 §5 isotropic kernels from the normal derivatives (local frame): iso_max Eq. 10, iso_sum Eq. 13, iso_mean
-// Eq. 14, iso_rect K16 Listing 4. Filter indices as the port: 4 iso_max, 5 iso_sum, 6 iso_mean, 7 iso_rect.
+// Eq. 14, iso_rect K16 Listing 4.
 float spc_ggxf_iso(int fmode, vec3 du, vec3 dv, float sigma2, float kappa) {
     float uu = dot(du, du), vv = dot(dv, dv), uv = dot(du, dv);
-    if (fmode == 4) return min(2.0 * sigma2 * spc_ggxf_eigmax(vec3(uu, uv, vv)), kappa);
-    if (fmode == 5) return min(2.0 * sigma2 * (uu + vv), kappa);
-    if (fmode == 6) return min(sigma2 * (uu + vv), kappa);
+    if (fmode == SPC_GGXF_FILTER_ISO_MAX) return min(2.0 * sigma2 * spc_ggxf_eigmax(vec3(uu, uv, vv)), kappa);
+    if (fmode == SPC_GGXF_FILTER_ISO_SUM) return min(2.0 * sigma2 * (uu + vv), kappa);
+    if (fmode == SPC_GGXF_FILTER_ISO_MEAN) return min(sigma2 * (uu + vv), kappa);
     float w = max(abs(du.x) + abs(dv.x), abs(du.y) + abs(dv.y));
     return min(2.0 * sigma2 * w * w, kappa);
 }
@@ -81,15 +78,19 @@ vec2 spc_ggxf_dq(vec3 h, float len, vec3 dwo, vec3 dwi, vec3 dn, bool slope) {
 }
 vec2 spc_ggxf_q(vec3 h, bool slope) { return slope ? -h.xy / max(abs(h.z), 1e-12) : h.xy; }
 
+bool spc_ggxf_isotropic(int fmode) {
+    return fmode == SPC_GGXF_FILTER_ISO_MAX || fmode == SPC_GGXF_FILTER_ISO_SUM || fmode == SPC_GGXF_FILTER_ISO_MEAN ||
+           fmode == SPC_GGXF_FILTER_ISO_RECT;
+}
 // Ā for (o, i) in the local frame. quad: dFdxFine/dFdyFine of q (uniform control flow required).
 vec3 spc_ggxf_filtered(vec3 A, vec3 o, vec3 i, int fmode, int kernel, float sigma2, float kappa, bool quad, vec3 dn0, vec3 dn1,
                        vec3 dwo0, vec3 dwo1, vec3 dwi0, vec3 dwi1) {
-    if (fmode == 1) return A;
-    if (fmode >= 4) {
+    if (fmode == SPC_GGXF_FILTER_NONE) return A;
+    if (spc_ggxf_isotropic(fmode)) {
         return vec3(clamp(A.x + spc_ggxf_iso(fmode, dn0, dn1, sigma2, kappa), 0.0, 1.0), A.y,
                     clamp(A.z + spc_ggxf_iso(fmode, dn0, dn1, sigma2, kappa), 0.0, 1.0));
     }
-    bool slope = fmode == 2;
+    bool slope = fmode == SPC_GGXF_FILTER_SLOPE;
     vec3 H = o + i;
     float len = length(H);
     vec3 h = H / len;
@@ -102,15 +103,20 @@ vec3 spc_ggxf_filtered(vec3 A, vec3 o, vec3 i, int fmode, int kernel, float sigm
         du = spc_ggxf_dq(h, len, dwo0, dwi0, dn0, slope);
         dv = spc_ggxf_dq(h, len, dwo1, dwi1, dn1, slope);
     }
-    if (fmode == 3) return spc_ggxf_projected(A, du, dv, kernel, sigma2, kappa);
+    if (fmode == SPC_GGXF_FILTER_PROJECTED) return spc_ggxf_projected(A, du, dv, kernel, sigma2, kappa);
     return spc_ggxf_additive(A, du, dv, kernel, sigma2, kappa);
 }
 
-void spc_bsdf_ggx_filtered(SpeculaShadingInputs s, vec3 wo, vec3 wi, vec3 weight, vec2 alpha, vec3 covariance, int fmode,
+void spc_bsdf_ggx_filtered(SpeculaClosureQuery q, SpeculaShadingInputs s, vec3 weight, vec2 alpha, vec3 covariance, int filter_,
                            int kernel, float sigma2, float kappa, int derivatives, float derivative_scale, vec3 f0, vec3 normal,
                            vec3 tangent, out SpeculaClosure bsdf, out vec2 filtered_alpha) {
-    bsdf.f = vec3(0.0);
-    bsdf.emission = vec3(0.0);
+    bsdf = spc_closure_none();
+    filtered_alpha = alpha;
+    if (q.kind != SPC_QUERY_DIRECTION) {  // no closed form over polygons: the host samples this lobe
+        bsdf.partial = true;
+        return;
+    }
+    int fmode = filter_;
     // A = diag(α²) + 2Σ, Σ made positive semi-definite; τ = det A (A.4).
     vec2 a = clamp(alpha, vec2(1e-4), vec2(0.999));
     // covariance = (var_x, var_y, cov_xy), as texture.lean outputs it
@@ -121,9 +127,9 @@ void spc_bsdf_ggx_filtered(SpeculaShadingInputs s, vec3 wo, vec3 wi, vec3 weight
     kappa = max(kappa, 0.0);
     vec3 T, B, N;
     spc_frame(normal, tangent, T, B, N);
-    vec3 o = spc_to_local(wo, T, B, N);
-    vec3 i = spc_to_local(wi, T, B, N);
-    bool quad = derivatives == 1;
+    vec3 o = spc_to_local(q.wo, T, B, N);
+    vec3 i = spc_to_local(q.wi, T, B, N);
+    bool quad = derivatives == SPC_DERIVATIVES_QUAD;
     float sc = derivative_scale;
     vec3 dn0, dn1;
     if (quad) {
@@ -133,10 +139,15 @@ void spc_bsdf_ggx_filtered(SpeculaShadingInputs s, vec3 wo, vec3 wi, vec3 weight
         dn0 = spc_to_local(s.dNdx, T, B, N) * sc;
         dn1 = spc_to_local(s.dNdy, T, B, N) * sc;
     }
-    vec3 dwo0 = spc_to_local(spc_ggxf_dwo_dx, T, B, N) * sc, dwo1 = spc_to_local(spc_ggxf_dwo_dy, T, B, N) * sc;
-    vec3 dwi0 = spc_to_local(spc_ggxf_dwi_dx, T, B, N) * sc, dwi1 = spc_to_local(spc_ggxf_dwi_dy, T, B, N) * sc;
+    vec3 dwo0 = spc_to_local(s.dwodx, T, B, N) * sc, dwo1 = spc_to_local(s.dwody, T, B, N) * sc;
+    vec3 dwi0 = vec3(0.0), dwi1 = vec3(0.0);
+    if (!isinf(q.light_distance) && q.light_distance > 0.0) {
+        vec3 dp0 = spc_to_local(s.dPdx, T, B, N) * sc, dp1 = spc_to_local(s.dPdy, T, B, N) * sc;
+        dwi0 = -(dp0 - i * dot(i, dp0)) / q.light_distance;
+        dwi1 = -(dp1 - i * dot(i, dp1)) / q.light_distance;
+    }
     // Debug output: Ā at the mirror configuration (h = n, directional light), analytic reading.
-    vec3 Am = (o.z > 0.0 || fmode >= 4) ? spc_ggxf_filtered(A, o, vec3(-o.x, -o.y, o.z), fmode, kernel, sigma2, kappa, false, dn0, dn1, dwo0, dwo1,
+    vec3 Am = (o.z > 0.0 || spc_ggxf_isotropic(fmode)) ? spc_ggxf_filtered(A, o, vec3(-o.x, -o.y, o.z), fmode, kernel, sigma2, kappa, false, dn0, dn1, dwo0, dwo1,
                                             vec3(0.0), vec3(0.0))
                         : A;
     filtered_alpha = sqrt(vec2(Am.x, Am.z));

@@ -51,7 +51,7 @@ const NodeParams<Params> kParams = NodeParams<Params>()
     .choice("kernel", &Params::kernel, "half-vector filters: bounding rectangle with κ clamp, or full Σ")
     .f("sigma2", &Params::sigma2, float(kDefaultSigma2), "pixel-filter variance σ² (0.25 reproduces K16/TK19)").range(0.05f, 0.5f).hard(0.f, 1e3f)
     .f("kappa", &Params::kappa, float(kDefaultKappa), "kernel clamp κ (axis-aligned and isotropic filters)").range(0.f, 1.f).hard(0.f, 1e3f)
-    .choice("derivatives", &Params::derivatives, "analytic: ray differentials; quad: 2×2 finite differences (dFdxFine)")
+    .choice("derivatives", &Params::derivatives, "analytic: ray differentials; quad: 2×2 finite differences (dFdxFine)").uniform()
     .f("derivative_scale", &Params::derivativeScale, 1.f, "multiplies every screen derivative").range(0.f, 2.f).hard(0.f, 1e3f)
     .c3("f0", &Params::f0, Vec3(0.04f), "Schlick F0 (1 = no Fresnel)").range(0.f, 1.f).hard(0.f, 1.f)
     .n3("normal", &Params::normal, Vec3(0, 0, 1), "shading normal").bind(GeomBinding::N)
@@ -132,7 +132,7 @@ void reg(NodeRegistry& r) {
             "height-correlated Smith G2, slope-space (K16), projected-space exact/approximate and isotropic filters.";
     s.inputs = kParams.ports();
     s.outputs = kOutputs.ports();
-    s.flags = kGlslDirections | kGlslShading | kNeedsDerivatives;
+    s.flags = kNeedsDerivatives;
     s.cpu = &cpu;
     s.glslFunction = "spc_bsdf_ggx_filtered";
     s.glslFile = "bsdf/ggx_filtered/ggx_filtered.glsl";

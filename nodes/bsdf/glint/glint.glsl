@@ -1,10 +1,9 @@
 // bsdf.glint: f.cos of the procedural glint BRDF (C20) with GGAA and slope correlation (C21), the GLSL twin of
 // nodes/bsdf/glint/glint_bsdf.h (same operations, spec glint-brdf.md §3 S0-S7).
-// Host contract: bind the dictionary at unit 15 as a GL_TEXTURE_1D_ARRAY, RGBA32F, width 64, 1024 layers, MIPs 0..6
-// uploaded from glint::Dictionary::gpuMipRgba(m) (our exact box pyramid, not glGenerateMipmap), MIN_FILTER
-// LINEAR_MIPMAP_LINEAR, MAG_FILTER LINEAR, WRAP_S MIRRORED_REPEAT (C21 supplemental), MAX_LEVEL 6.
-// Layer = k*64 + d/3, channel = d%3 (C20/C21 layout). Without GGAA the level-0 table is read with textureLod.
-layout(binding = 15) uniform sampler1DArray spc_glint_dictionary;
+// The dictionary is the node's resource 'dictionary' (a sampler1DArray parameter; the emitter declares and binds it and
+// lists its texels and sampler state in the module's resource manifest): RGBA32F, width 64, 1024 layers, our exact box
+// MIP chain 0..6, trilinear, mirrored repeat on s (C21 supplemental). Layer = k*64 + d/3, channel = d%3 (C20/C21
+// layout). Without GGAA the level-0 table is read with textureLod.
 
 const float SPC_GLINT_SIGMA_O = 0.35355339059327373;
 const float SPC_GLINT_LIM = 1.4142135623730951;  // 4 sigma_o
@@ -54,9 +53,9 @@ float spc_glint_erfinv(float x) {
 }
 
 // One marginal d of dictionary level k at u (texture units), unfiltered or with the GGAA gradients (S5.4).
-float spc_glint_marginal(int k, int d, float u, bool ggaa, float g1, float g2) {
+float spc_glint_marginal(sampler1DArray dictionary, int k, int d, float u, bool ggaa, float g1, float g2) {
     vec2 tc = vec2(u, float(k * 64 + d / 3));
-    vec4 t = ggaa ? textureGrad(spc_glint_dictionary, tc, g1, g2) : textureLod(spc_glint_dictionary, tc, 0.0);
+    vec4 t = ggaa ? textureGrad(dictionary, tc, g1, g2) : textureLod(dictionary, tc, 0.0);
     int ch = d - 3 * (d / 3);
     return ch == 0 ? t.x : (ch == 1 ? t.y : t.z);
 }
@@ -71,7 +70,7 @@ struct SpcGlintQuery {
 };
 
 // S4 + S5: SDF of cell (s, t) at level l.
-float spc_glint_cell(SpcGlintQuery q, int l, int s, int t) {
+float spc_glint_cell(sampler1DArray dictionary, SpcGlintQuery q, int l, int s, int t) {
     uint p = 1u << uint(l);
     uint S = uint(s) * p + 1549u * uint(t) * p;
     float uA = spc_glint_hash(13u * S), uZ = spc_glint_hash(2171u * S), uT = spc_glint_hash(S);
@@ -89,13 +88,13 @@ float spc_glint_cell(SpcGlintQuery q, int l, int s, int t) {
     float ux = abs(mx) / SPC_GLINT_LIM, uy = abs(my) / SPC_GLINT_LIM;
     float gxx = c * q.gx.x + sn * q.gx.y, gxy = -sn * q.gx.x + c * q.gx.y;
     float gyx = c * q.gy.x + sn * q.gy.y, gyy = -sn * q.gy.x + c * q.gy.y;
-    float px = spc_glint_marginal(k, i, ux, q.ggaa, gxx, gyx);
-    float py = spc_glint_marginal(k, j, uy, q.ggaa, gxy, gyy);
+    float px = spc_glint_marginal(dictionary, k, i, ux, q.ggaa, gxx, gyx);
+    float py = spc_glint_marginal(dictionary, k, j, uy, q.ggaa, gxy, gyy);
     return q.detMinv * px * py;
 }
 
 // S3: EWA weights over the cells of level l (cap: 100 cells).
-float spc_glint_level(SpcGlintQuery q, int l, vec2 uv, vec2 a1, vec2 a2) {
+float spc_glint_level(sampler1DArray dictionary, SpcGlintQuery q, int l, vec2 uv, vec2 a1, vec2 a2) {
     float n = float(1 << (15 - l));
     float cs = uv.x * n - 0.5, ct = uv.y * n - 0.5;
     vec2 b1 = a1 * n, b2 = a2 * n;
@@ -123,7 +122,7 @@ float spc_glint_level(SpcGlintQuery q, int l, vec2 uv, vec2 a1, vec2 a2) {
             ++count;
             float W = exp(-2.0 * r2) - 0.13533528;
             sumW += W;
-            sumWP += W * spc_glint_cell(q, l, s, t);
+            sumWP += W * spc_glint_cell(dictionary, q, l, s, t);
         }
     }
     return sumW > 0.0 ? sumWP / sumW : 0.0;
@@ -131,12 +130,16 @@ float spc_glint_level(SpcGlintQuery q, int l, vec2 uv, vec2 a1, vec2 a2) {
 
 vec3 spc_glint_frame_rotation(vec2 a, vec3 w) { return vec3(-a.x * w.z, -a.y * w.z, a.x * w.x + a.y * w.y); }
 
-void spc_bsdf_glint(SpeculaShadingInputs s, vec3 wo, vec3 wi, vec3 weight, float sigma_x, float sigma_y, float rho,
+void spc_bsdf_glint(SpeculaClosureQuery q, SpeculaShadingInputs s, sampler1DArray dictionary, vec3 weight, float sigma_x, float sigma_y, float rho,
                     float log_density, float relative_area, float density_jitter, float max_anisotropy, int ggaa,
                     float kernel_scale, int derivative, vec3 f0, vec2 lean_mean, vec3 lean_cov, vec3 normal,
                     vec3 tangent, vec2 uv, vec2 duvdx, vec2 duvdy, float uv_scale, out SpeculaClosure bsdf) {
-    bsdf.f = vec3(0.0);
-    bsdf.emission = vec3(0.0);
+    bsdf = spc_closure_none();
+    if (q.kind != SPC_QUERY_DIRECTION) {  // no closed form over polygons: the host samples this lobe
+        bsdf.partial = true;
+        return;
+    }
+    vec3 wo = q.wo, wi = q.wi;
     float sx = clamp(sigma_x, 0.01, 1.0), sy = clamp(sigma_y, 0.01, 1.0), r = clamp(rho, -0.99, 0.99);
     vec3 T, B, N;
     spc_frame(normal, tangent, T, B, N);
@@ -166,30 +169,36 @@ void spc_bsdf_glint(SpeculaShadingInputs s, vec3 wo, vec3 wi, vec3 weight, float
     float woh = dot(o, h), wih = dot(i, h);
     if (h.z <= 0.0 || woh <= 0.0 || wih <= 0.0) return;
 
-    SpcGlintQuery q;
-    q.sx = sx;
-    q.sy = sy;
-    q.rho = r;
-    q.sq = sqrt(1.0 - r * r);
-    float mi00 = SPC_GLINT_SIGMA_O / (sx * q.sq), mi01 = -SPC_GLINT_SIGMA_O * r / (sy * q.sq), mi11 = SPC_GLINT_SIGMA_O / sy;
-    q.detMinv = SPC_GLINT_SIGMA_O * SPC_GLINT_SIGMA_O / (sx * sy * q.sq);
-    q.relArea = relative_area;
-    q.jitter = density_jitter;
-    q.lcBase = log_density / 1.38629436 - 15.0;
+    SpcGlintQuery gq;
+    gq.sx = sx;
+    gq.sy = sy;
+    gq.rho = r;
+    gq.sq = sqrt(1.0 - r * r);
+    float mi00 = SPC_GLINT_SIGMA_O / (sx * gq.sq), mi01 = -SPC_GLINT_SIGMA_O * r / (sy * gq.sq), mi11 = SPC_GLINT_SIGMA_O / sy;
+    gq.detMinv = SPC_GLINT_SIGMA_O * SPC_GLINT_SIGMA_O / (sx * sy * gq.sq);
+    gq.relArea = relative_area;
+    gq.jitter = density_jitter;
+    gq.lcBase = log_density / 1.38629436 - 15.0;
     vec2 hs = vec2(-h.x / h.z, -h.y / h.z);
-    q.mh = vec2(mi00 * hs.x + mi01 * hs.y, mi11 * hs.y);
-    q.pB = spc_glint_beckmann(hs, sx, sy, r, q.sq);
-    q.ggaa = ggaa == 0;
-    q.gx = vec2(0.0);
-    q.gy = vec2(0.0);
-    if (q.ggaa) {
+    gq.mh = vec2(mi00 * hs.x + mi01 * hs.y, mi11 * hs.y);
+    gq.pB = spc_glint_beckmann(hs, sx, sy, r, gq.sq);
+    gq.ggaa = ggaa == SPC_GLINT_GGAA_ON;
+    gq.gx = vec2(0.0);
+    gq.gy = vec2(0.0);
+    if (gq.ggaa) {
         // Per-pixel dh from the frame rotation (T.dN, B.dN) (C21 §6.1: once per pixel, not per cell).
         vec2 anx = vec2(dot(T, s.dNdx), dot(B, s.dNdx)), any = vec2(dot(T, s.dNdy), dot(B, s.dNdy));
-        vec3 sx3 = spc_glint_frame_rotation(anx, o) + vec3(0.0) + spc_glint_frame_rotation(anx, i);
-        vec3 sy3 = spc_glint_frame_rotation(any, o) + vec3(0.0) + spc_glint_frame_rotation(any, i);
+        // Plus the change of wo (s.dwodx) and, for a point light at q.light_distance, of wi = -(I - wi wi^T) dp / dist.
+        vec3 sx3 = spc_glint_frame_rotation(anx, o) + spc_to_local(s.dwodx, T, B, N) + spc_glint_frame_rotation(anx, i);
+        vec3 sy3 = spc_glint_frame_rotation(any, o) + spc_to_local(s.dwody, T, B, N) + spc_glint_frame_rotation(any, i);
+        if (!isinf(q.light_distance) && q.light_distance > 0.0) {
+            vec3 dpx = spc_to_local(s.dPdx, T, B, N), dpy = spc_to_local(s.dPdy, T, B, N);
+            sx3 -= (dpx - i * dot(i, dpx)) / q.light_distance;
+            sy3 -= (dpy - i * dot(i, dpy)) / q.light_distance;
+        }
         vec3 dhx = (sx3 - h * dot(h, sx3)) / len, dhy = (sy3 - h * dot(h, sy3)) / len;
         vec2 dx, dy;
-        if (derivative == 0) {  // projected half vector (C21 Eq. 21)
+        if (derivative == SPC_GLINT_DERIVATIVE_PROJECTED_HALF) {  // projected half vector (C21 Eq. 21)
             dx = dhx.xy;
             dy = dhy.xy;
         } else {  // half slope (C21 Eq. 20)
@@ -198,8 +207,8 @@ void spc_bsdf_glint(SpeculaShadingInputs s, vec3 wo, vec3 wi, vec3 weight, float
             dy = vec2(-(dhy.x * h.z - h.x * dhy.z) * iz2, -(dhy.y * h.z - h.y * dhy.z) * iz2);
         }
         float kk = kernel_scale / SPC_GLINT_LIM;
-        q.gx = vec2(mi00 * dx.x + mi01 * dx.y, mi11 * dx.y) * kk;
-        q.gy = vec2(mi00 * dy.x + mi01 * dy.y, mi11 * dy.y) * kk;
+        gq.gx = vec2(mi00 * dx.x + mi01 * dx.y, mi11 * dx.y) * kk;
+        gq.gy = vec2(mi00 * dy.x + mi01 * dy.y, mi11 * dy.y) * kk;
     }
 
     // S1/S2: footprint and LOD.
@@ -210,7 +219,7 @@ void spc_bsdf_glint(SpeculaShadingInputs s, vec3 wo, vec3 wi, vec3 weight, float
     float amax = max(max_anisotropy, 1.0);
     float P;
     if (!(la2 > 0.0) || isinf(la1) || isnan(la1)) {
-        P = q.pB;
+        P = gq.pB;
     } else {
         if (la1 > amax * la2) {
             a2 = a2 * (la1 / (amax * la2));
@@ -220,8 +229,8 @@ void spc_bsdf_glint(SpeculaShadingInputs s, vec3 wo, vec3 wi, vec3 weight, float
         float i0f = floor(lodP);
         int i0 = int(i0f);
         float w = lodP - i0f;
-        P = spc_glint_level(q, i0, suv, a1, a2);
-        if (w > 0.0) P = (1.0 - w) * P + w * spc_glint_level(q, min(i0 + 1, 15), suv, a1, a2);
+        P = spc_glint_level(dictionary, gq, i0, suv, a1, a2);
+        if (w > 0.0) P = (1.0 - w) * P + w * spc_glint_level(dictionary, gq, min(i0 + 1, 15), suv, a1, a2);
     }
     // S7: D = P / h_z^4, V-cavity G, Schlick F at wo.h; returns f cos = F G D / (4 wo.z).
     float hz2 = h.z * h.z;

@@ -112,6 +112,23 @@ void cpu(EvalContext& c, const Instr& i) {
     emitLobe(c, i, kBsdf, f, in.weight, c.arena->make<GlintLobe>(Dictionary::instance(), p, ev, fr));
 }
 
+// The dictionary the GLSL reads (glint.glsl header): RGBA32F 1D array, 64 texels x 1024 layers, our box MIP chain,
+// trilinear, mirrored repeat on s.
+ResourceImage dictionaryTexels(const void*) {
+    const Dictionary& d = Dictionary::instance();
+    ResourceImage r;
+    for (int m = 0; m < kMips; ++m) {
+        ResourceImage::Level lv;
+        lv.width = mipRes(m);
+        lv.height = Dictionary::kGpuLayers;
+        lv.rgba = d.gpuMipRgba(m);
+        r.levels.push_back(std::move(lv));
+    }
+    r.wrapS = "mirrored_repeat";
+    r.wrapT = "clamp_to_edge";
+    return r;
+}
+
 void reg(NodeRegistry& r) {
     NodeSpec s;
     s.id = "bsdf.glint";
@@ -120,7 +137,10 @@ void reg(NodeRegistry& r) {
             "(Chermain et al. 2021); converges to Cook-Torrance with a correlated Beckmann NDF as density grows.";
     s.inputs = kParams.ports();
     s.outputs = kOutputs.ports();
-    s.flags = kGlslShading | kGlslDirections | kNeedsDerivatives;
+    s.flags = kNeedsDerivatives;
+    s.resources = {{"dictionary", "sampler1DArray", ResourceSpec::Kind::BuiltinTable,
+                    "glint dictionary (Chermain et al. 2020): 64 x 1024 layers RGBA32F, box MIP chain 0..6",
+                    &dictionaryTexels}};
     s.cpu = &cpu;
     s.glslFunction = "spc_bsdf_glint";
     s.glslFile = "bsdf/glint/glint.glsl";

@@ -1,5 +1,6 @@
 // closure.add: a + b.
-void spc_closure_add(SpeculaClosure a, SpeculaClosure b, out SpeculaClosure o) {
-    o.f = a.f + b.f;
-    o.emission = a.emission + b.emission;
+void spc_closure_add(SpeculaClosure a, SpeculaClosure b, out SpeculaClosure bsdf) {
+    bsdf.f = a.f + b.f;
+    bsdf.emission = a.emission + b.emission;
+    bsdf.partial = a.partial || b.partial;
 }

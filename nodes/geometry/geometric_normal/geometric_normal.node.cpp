@@ -19,7 +19,6 @@ void reg(NodeRegistry& r) {
     s.category = "geometry";
     s.doc = "Geometric normal Ng (world).";
     s.outputs = kOutputs.ports();
-    s.flags = kGlslShading;
     s.cpu = &cpu;
     s.glslFunction = "spc_geometry_geometric_normal";
     s.glslFile = "geometry/geometric_normal/geometric_normal.glsl";

@@ -23,7 +23,7 @@ void reg(NodeRegistry& r) {
     s.category = "geometry";
     s.doc = "Shading normal N (world) and its screen-space derivatives.";
     s.outputs = kOutputs.ports();
-    s.flags = kGlslShading | kNeedsDerivatives;
+    s.flags = kNeedsDerivatives;
     s.cpu = &cpu;
     s.glslFunction = "spc_geometry_normal";
     s.glslFile = "geometry/normal/normal.glsl";

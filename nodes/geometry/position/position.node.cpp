@@ -23,7 +23,7 @@ void reg(NodeRegistry& r) {
     s.category = "geometry";
     s.doc = "World-space position P and its screen-space derivatives.";
     s.outputs = kOutputs.ports();
-    s.flags = kGlslShading | kNeedsDerivatives;
+    s.flags = kNeedsDerivatives;
     s.cpu = &cpu;
     s.glslFunction = "spc_geometry_position";
     s.glslFile = "geometry/position/position.glsl";

@@ -21,7 +21,6 @@ void reg(NodeRegistry& r) {
     s.category = "geometry";
     s.doc = "Mesh tangent T (world) and the bitangent sign.";
     s.outputs = kOutputs.ports();
-    s.flags = kGlslShading;
     s.cpu = &cpu;
     s.glslFunction = "spc_geometry_tangent";
     s.glslFile = "geometry/tangent/tangent.glsl";

@@ -23,7 +23,7 @@ void reg(NodeRegistry& r) {
     s.category = "geometry";
     s.doc = "Texture coordinates uv0 and their screen-space derivatives.";
     s.outputs = kOutputs.ports();
-    s.flags = kGlslShading | kNeedsDerivatives;
+    s.flags = kNeedsDerivatives;
     s.cpu = &cpu;
     s.glslFunction = "spc_geometry_uv";
     s.glslFile = "geometry/uv/uv.glsl";

@@ -19,7 +19,7 @@ struct Params {
 const NodeParams<Params> kParams = NodeParams<Params>()
     .str("file", "image path (relative to the scene file)")
     .str("colorspace", "colorspace of the file (OCIO name/alias, or \"raw\" for data)")
-    .choice("wrap", &Params::wrap, "wrap mode")
+    .choice("wrap", &Params::wrap, "wrap mode (sampler state)").uniform()
     .v2("uv", &Params::uv, Vec2(0.f), "texture coordinates").range(-1.f, 2.f).bind(GeomBinding::UV)
     .v2("duvdx", &Params::duvdx, Vec2(0.f), "footprint: d(uv)/dx").range(-0.01f, 0.01f).bind(GeomBinding::DUVDX)
     .v2("duvdy", &Params::duvdy, Vec2(0.f), "footprint: d(uv)/dy").range(-0.01f, 0.01f).bind(GeomBinding::DUVDY);
@@ -53,6 +53,31 @@ std::shared_ptr<const void> prepare(const PrepareContext& pc) {
     return d;
 }
 
+// The sampler the GLSL reads: the working-space image, RGBA (missing channels expanded like TextureStore::sample),
+// rows bottom-up, MIP-mapped by the host, trilinear, with the node's wrap mode.
+ResourceImage imageTexels(const void* prepared) {
+    const auto* d = static_cast<const ImageData*>(prepared);
+    const TextureStore& st = *d->store;
+    int w = st.width(d->handle), h = st.height(d->handle), c = st.channels(d->handle);
+    const std::vector<float>& src = st.pixels(d->handle);
+    ResourceImage r;
+    r.levels.resize(1);
+    r.levels[0].width = w;
+    r.levels[0].height = h;
+    r.levels[0].rgba.resize(size_t(w) * h * 4);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+            for (int k = 0; k < 4; ++k) {
+                const float* p = &src[(size_t(h - 1 - y) * w + x) * c];
+                r.levels[0].rgba[(size_t(y) * w + x) * 4 + k] = k < c ? p[k] : (k == 3 ? 1.f : p[c - 1]);
+            }
+    r.generateMipmaps = true;
+    r.colorspace = "working";
+    const char* wrap = d->wrap == TextureWrap::Clamp ? "clamp_to_edge" : d->wrap == TextureWrap::Mirror ? "mirrored_repeat" : "repeat";
+    r.wrapS = r.wrapT = wrap;
+    return r;
+}
+
 void cpu(EvalContext& c, const Instr& i) {
     const auto* d = static_cast<const ImageData*>(i.data);
     const Params p = kParams.read(c, i);
@@ -69,7 +94,10 @@ void reg(NodeRegistry& r) {
     s.doc = "Filtered image lookup. v = 0 is the bottom row (OpenGL convention).";
     s.inputs = kParams.ports();
     s.outputs = kOutputs.ports();
-    s.flags = kNeedsDerivatives | kGlslTexture;
+    s.flags = kNeedsDerivatives;
+    s.resources = {{"image", "sampler2D", ResourceSpec::Kind::ImageFile,
+                    "the image in the working space, RGBA, rows bottom-up, MIP-mapped, trilinear, wrap as the input",
+                    &imageTexels, "file", "colorspace"}};
     s.cpu = &cpu;
     s.prepare = &prepare;
     s.glslFunction = "spc_texture_image";

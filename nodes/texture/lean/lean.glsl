@@ -4,7 +4,7 @@
 // l interleaves rows: 2j = (x, y, x², y²), 2j+1 = (xy, h_l, levels, 0); level l has max(1, w0 >> l) x max(1, h0 >> l) moments. Filtering is done here with texelFetch,
 // step for step as LeanPyramid::lookup (bilinear, trilinear at λ, EXT_texture_filter_anisotropic probes).
 int spc_lean_wrap(int i, int n, int wrap) {
-    if (wrap == 1) return clamp(i, 0, n - 1);
+    if (wrap == SPC_LEAN_WRAP_CLAMP) return clamp(i, 0, n - 1);
     return i - n * int(floor(float(i) / float(n)));
 }
 void spc_lean_bilinear(sampler2D tex, int l, vec2 uv, int wrap, out vec4 a, out float b) {
@@ -53,9 +53,9 @@ void spc_lean_trilinear(sampler2D tex, int top, float lambda, vec2 uv, int wrap,
         b += b1 * f;
     }
 }
-// filt: 0 anisotropic, 1 trilinear, 2 none (level 0). Returns the moments (x, y, x², y²) and xy.
+// filt: SPC_LEAN_FILTER_* (none reads level 0). Returns the moments (x, y, x², y²) and xy.
 void spc_lean_lookup(sampler2D tex, vec2 uv, vec2 duvdx, vec2 duvdy, int filt, int wrap, out vec4 a, out float b) {
-    if (filt == 2) {
+    if (filt == SPC_LEAN_FILTER_NONE) {
         spc_lean_bilinear(tex, 0, uv, wrap, a, b);
         return;
     }
@@ -63,7 +63,7 @@ void spc_lean_lookup(sampler2D tex, vec2 uv, vec2 duvdx, vec2 duvdy, int filt, i
     vec2 size = vec2(float(textureSize(tex, 0).x), texelFetch(tex, ivec2(0, 1), 0).g);
     vec2 j1 = duvdx * size, j2 = duvdy * size;
     float l1 = sqrt(dot(j1, j1)), l2 = sqrt(dot(j2, j2));
-    if (filt == 1) {
+    if (filt == SPC_LEAN_FILTER_TRILINEAR) {
         float rho = max(l1, l2);
         if (rho > 0.0) spc_lean_trilinear(tex, top, log2(rho), uv, wrap, a, b);
         else spc_lean_bilinear(tex, 0, uv, wrap, a, b);
@@ -91,20 +91,20 @@ void spc_lean_lookup(sampler2D tex, vec2 uv, vec2 duvdx, vec2 duvdy, int filt, i
         b += pb * wgt;
     }
 }
-void spc_texture_lean(sampler2D tex, int convention, int filt, int correlation, int wrap, float strength, vec2 uv,
-                      vec2 duvdx, vec2 duvdy, vec3 normal, vec3 tangent, float sgn, out vec3 n, out vec2 slope,
+void spc_texture_lean(sampler2D moments, int convention, int filter_, int correlation, int wrap, float strength, vec2 uv,
+                      vec2 duvdx, vec2 duvdy, vec3 normal, vec3 tangent, float sign_, out vec3 normal_out, out vec2 slope,
                       out vec3 sigma_rho, out vec3 covariance) {
     vec4 m;
     float mxy;
-    spc_lean_lookup(tex, uv, duvdx, duvdy, filt, wrap, m, mxy);
+    spc_lean_lookup(moments, uv, duvdx, duvdy, filter_, wrap, m, mxy);
     // leanStats (core/texture/lean_moments.cpp): flip y for DirectX maps and for left-handed frames.
-    bool flip = (convention == 1) != (sgn < 0.0);
+    bool flip = (convention == SPC_NORMAL_MAP_DIRECTX) != (sign_ < 0.0);
     float sy = flip ? -1.0 : 1.0;
     vec2 mean = vec2(m.x, m.y * sy) * strength;
     float s2 = strength * strength;
     float varX = max(m.z - m.x * m.x, 0.0) * s2;
     float varY = max(m.w - m.y * m.y, 0.0) * s2;
-    float cov = correlation == 1 ? 0.0 : (mxy - m.x * m.y) * sy * s2;
+    float cov = correlation == SPC_LEAN_CORRELATION_IGNORE ? 0.0 : (mxy - m.x * m.y) * sy * s2;
     float sx = sqrt(varX), sY = sqrt(varY);
     float lim = sx * sY;
     cov = min(max(cov, -lim), lim);
@@ -115,7 +115,7 @@ void spc_texture_lean(sampler2D tex, int convention, int filt, int correlation, 
     spc_frame(normal, tangent, T, B, N);
     vec3 nw = nt.x * T + nt.y * B + nt.z * N;
     float l2 = dot(nw, nw);
-    n = l2 > 0.0 ? nw / sqrt(l2) : N;
+    normal_out = l2 > 0.0 ? nw / sqrt(l2) : N;
     slope = mean;
     sigma_rho = vec3(sx, sY, rho);
     covariance = vec3(varX, varY, cov);

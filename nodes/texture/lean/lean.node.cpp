@@ -109,6 +109,23 @@ std::shared_ptr<const void> prepare(const PrepareContext& pc) {
     return d;
 }
 
+// The sampler the GLSL reads: LeanPyramid's packed GLSL levels (core/texture/lean_moments.h glslPackedLevel), every
+// level given, read with texelFetch (nearest).
+ResourceImage momentTexels(const void* prepared) {
+    const LeanPyramid& P = *static_cast<const LeanData*>(prepared)->pyramid;
+    ResourceImage r;
+    for (int l = 0; l < P.glslLevels(); ++l) {
+        ResourceImage::Level lv;
+        P.glslLevelSize(l, lv.width, lv.height);
+        lv.rgba = P.glslPackedLevel(l);
+        r.levels.push_back(std::move(lv));
+    }
+    r.minFilter = "nearest_mipmap_nearest";
+    r.magFilter = "nearest";
+    r.wrapS = r.wrapT = "clamp_to_edge";
+    return r;
+}
+
 void cpu(EvalContext& c, const Instr& i) {
     const auto* d = static_cast<const LeanData*>(i.data);
     const Params p = kParams.read(c, i);
@@ -137,7 +154,10 @@ void reg(NodeRegistry& r) {
             "(T, N x T, N) of the normal/tangent inputs. Slopes: x = -nx/nz, y = -ny/nz.";
     s.inputs = kParams.ports();
     s.outputs = kOutputs.ports();
-    s.flags = kNeedsDerivatives | kGlslTexture;
+    s.flags = kNeedsDerivatives;
+    s.resources = {{"moments", "sampler2D", ResourceSpec::Kind::DerivedImage,
+                    "LEAN slope-moment pyramid built from the file on load (LeanPyramid::glslPackedLevel per level)",
+                    &momentTexels, "file", ""}};
     s.cpu = &cpu;
     s.prepare = &prepare;
     s.glslFunction = "spc_texture_lean";
