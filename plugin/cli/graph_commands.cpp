@@ -3,11 +3,14 @@
 #include "plugin/cli/graph_commands.h"
 
 #include "core/codegen/glsl_emitter.h"
+#include "core/codegen/glsl_manifest.h"
 #include "core/color/color_config.h"
 #include "core/graph/closure_util.h"
 #include "core/graph/graph_material.h"
 #include "core/render/lobes/ggx.h"
+#include "core/io/image_io.h"
 #include "core/texture/texture_store.h"
+#include "plugin/cli/cli_output.h"
 #include "core/util/error.h"
 
 #include <CLI/CLI.hpp>
@@ -153,20 +156,38 @@ void addGraphCommands(CLI::App& app, int& exitCode) {
     auto* glsl = app.add_subcommand("glsl", "Write the GLSL 4.50 module of a graph material");
     auto gFile = std::make_shared<std::string>(), gMat = std::make_shared<std::string>(), gOut = std::make_shared<std::string>();
     auto gInline = std::make_shared<bool>(false);
+    auto gPrefix = std::make_shared<std::string>(), gRes = std::make_shared<std::string>();
+    auto gBase = std::make_shared<int>(0), gSet = std::make_shared<int>(-1);
     glsl->add_option("file", *gFile, "scene or material-library JSON")->required();
     glsl->add_option("--material", *gMat, "material name (needed when the file has several)");
     glsl->add_option("-o,--output", *gOut, "output .glsl file")->required();
     glsl->add_flag("--inline-literals", *gInline, "emit literals as constants instead of a uniform block");
+    glsl->add_option("--prefix", *gPrefix, "prefix of the material's names (specula_<prefix>_eval ...), so several modules share a shader");
+    glsl->add_option("--binding-base", *gBase, "binding of the uniform block; resources follow (default 0)")->check(CLI::Range(0, 4096));
+    glsl->add_option("--set", *gSet, "Vulkan descriptor set of every binding (default: none)")->check(CLI::Range(0, 64));
+    glsl->add_option("--resources", *gRes, "write every resource as EXR files plus manifest.json into this folder");
     glsl->callback([=, &exitCode] {
         exitCode = run([&] {
+            if (std::filesystem::exists(*gOut) && std::filesystem::equivalent(*gOut, *gFile))
+                throw UsageError("-o '" + *gOut + "' is the input file");
+            if (!outputFolderExists(*gOut)) throw IoError("output folder of '" + *gOut + "' does not exist");
             Loaded l = readMaterial(*gFile, *gMat);
             graph::GraphDesc g = graph::parseGraph(l.material, l.pointer);
             codegen::GlslOptions opt;
             opt.materialName = l.name;
             opt.literalsAsUniforms = !*gInline;
+            opt.prefix = *gPrefix;
+            opt.bindingBase = *gBase;
+            opt.set = *gSet;
             codegen::GlslModule m = codegen::emitGlsl(g, opt);
-            std::ofstream out(*gOut);
-            if (!(out << m.source)) throw IoError("cannot write '" + *gOut + "'");
+            if (!gRes->empty()) {
+                if (!std::filesystem::is_directory(*gRes)) throw IoError("resource folder '" + *gRes + "' does not exist");
+                MaterialInstance mi = instantiate(l);  // loads the textures the resources are made from
+                std::vector<graph::ResourceImage> images =
+                    codegen::exportGlslResources(g, m, GraphLoadContext{mi.textures.get(), l.baseDir});
+                codegen::writeGlslResources(m, images, *gRes, *ColorConfig::load("builtin"));
+            }
+            writeFileAtomic(*gOut, m.source);
         });
     });
 

@@ -276,13 +276,13 @@ std::string pageHeader(size_t nodeCount, size_t categoryCount) {
     h += std::to_string(nodeCount) + " nodes in " + std::to_string(categoryCount) + " categories.\n\n";
 
     h += "## Conventions\n\n";
-    h += "Each node is a folder `nodes/<family>/<node>/` with `<node>.node.cpp` (the `NodeSpec`: ports declared once, "
-         "CPU\nentry, registration via `SPECULA_REGISTER_NODES`) and `<node>.glsl` (embedded into the binary at build "
-         "time).\nTyped families register several specs from one folder (`math.add.float`, `math.add.vec2`, ...), "
-         "sharing one `.glsl`\nwith overloads. GLSL prototypes are derived from the ports:\n"
-         "`void fn([SpeculaShadingInputs s,] [vec3 wo, vec3 wi,] [sampler2D tex,] inputs..., out outputs...)`\n"
-         "(enum ports are passed as `int` index, plain string ports stay on the host; see "
-         "`NodeSpec::glslPrototype`).\n\n";
+    h += "Each node is a folder `nodes/<family>/<node>/` with `<node>.node.cpp` (a parameter struct and one `NodeParams` "
+         "list\nbinding each member to its port, the CPU entry, registration via `SPECULA_REGISTER_NODES`) and "
+         "`<node>.glsl`\n(embedded into the binary at build time). Typed families register several specs from one "
+         "folder (`math.add.float`,\n`math.add.vec2`, ...), sharing one `.glsl` with overloads. The GLSL function is "
+         "bound to the ports by parameter\nname (`SpeculaClosureQuery q` first for BSDFs, `SpeculaShadingInputs s`, "
+         "inputs, outputs, resources; enum ports\nare `int` constants `SPC_<ENUM>_<VALUE>`, plain string ports stay on "
+         "the host); the prototypes below are the bound ones\n(docs/graph-format.md).\n\n";
     h += "Input tables:\n\n"
          "- **default**: the value of an unlisted input (a number fills every component). Empty when the input is "
          "required\n  (closures, file names, colorspaces) or reads a binding.\n"

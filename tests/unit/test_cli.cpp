@@ -211,3 +211,38 @@ TEST(Cli, GlslAndPlotCommandsWriteTheirOutputs) {
     ASSERT_EQ(test::runCli("plot " + q(dir + "/s.json") + " --material m --wo 0.3,0,0.95 -o " + q(dir + "/lobe.png"), &out), 0) << out;
     EXPECT_TRUE(fs::exists(dir + "/lobe.png"));
 }
+
+TEST(Cli, GlslResourcesWritesAManifestAndEveryLevel) {
+    std::string dir = test::tempDir("cli-res");
+    fs::create_directories(dir + "/res");
+    std::string out;
+    const std::string tubes = test::sourcePath("examples/glint/tubes.json");
+    ASSERT_EQ(test::runCli("glsl " + q(tubes) + " -o " + q(dir + "/t.glsl") + " --prefix tubes --binding-base 3 --set 1 --resources " +
+                               q(dir + "/res"),
+                           &out),
+              0)
+        << out;
+    nlohmann::json m = nlohmann::json::parse(test::readFile(dir + "/res/manifest.json"));
+    EXPECT_EQ(m["uniform_block"]["binding"], 3);
+    EXPECT_EQ(m["uniform_block"]["set"], 1);
+    ASSERT_EQ(m["resources"].size(), 1u);  // the glint dictionary
+    const auto& r = m["resources"][0];
+    EXPECT_EQ(r["binding"], 4);
+    EXPECT_EQ(r["glsl_type"], "sampler1DArray");
+    EXPECT_EQ(r["kind"], "builtin_table");
+    ASSERT_EQ(r["levels"].size(), 7u);
+    EXPECT_EQ(r["levels"][0]["width"], 64);
+    EXPECT_EQ(r["levels"][0]["height"], 1024);
+    for (const auto& lv : r["levels"]) EXPECT_TRUE(fs::exists(dir + "/res/" + lv["exr"].get<std::string>())) << lv.dump();
+    std::string glsl = test::readFile(dir + "/t.glsl");
+    EXPECT_NE(glsl.find("layout(set = 1, binding = 4) uniform sampler1DArray " + r["name"].get<std::string>()), std::string::npos);
+    EXPECT_NE(glsl.find("vec3 specula_tubes_eval(SpeculaShadingInputs s, vec3 wo, vec3 wi)"), std::string::npos);
+    // A missing resource folder is an I/O error (exit 3) and writes no module.
+    EXPECT_EQ(test::runCli("glsl " + q(tubes) + " -o " + q(dir + "/u.glsl") + " --resources " + q(dir + "/nope"), &out), 3) << out;
+    EXPECT_FALSE(fs::exists(dir + "/u.glsl"));
+    // The module never replaces its input.
+    std::string copy = dir + "/copy.json";
+    fs::copy_file(tubes, copy);
+    EXPECT_EQ(test::runCli("glsl " + q(copy) + " -o " + q(copy), &out), 2) << out;
+    EXPECT_EQ(test::readFile(copy), test::readFile(tubes));
+}

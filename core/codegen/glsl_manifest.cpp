@@ -1,0 +1,94 @@
+// Resource manifest and EXR export of emitted GLSL modules (glsl_manifest.h).
+#include "core/codegen/glsl_manifest.h"
+
+#include "core/io/image_io.h"
+#include "core/util/error.h"
+
+#include <filesystem>
+#include <fstream>
+
+namespace specula::codegen {
+
+using nlohmann::json;
+
+json glslManifest(const GlslModule& mod, const std::vector<graph::ResourceImage>& images,
+                  const std::vector<std::vector<std::string>>& levelFiles) {
+    json m;
+    m["format"] = "specula-glsl-manifest";
+    m["version"] = 1;
+    m["entry_points"] = {{"material", mod.entryPrefix + "material"}, {"eval", mod.entryPrefix + "eval"},
+                         {"emission", mod.entryPrefix + "emission"}};
+    json members = json::array();
+    for (const GlslUniform& u : mod.uniforms) {
+        json v = json::array();
+        for (int c = 0; c < graph::typeWidth(u.type); ++c) v.push_back(u.value[size_t(c)]);
+        members.push_back({{"name", u.name}, {"glsl_type", graph::glslTypeName(u.type)}, {"offset", u.offset},
+                           {"value", v}, {"pointer", u.pointer}});
+    }
+    m["uniform_block"] = {{"binding", mod.uniformBinding}, {"set", mod.uniformSet}, {"size", mod.uniformBlockSize},
+                          {"layout", "std140"}, {"members", members}};
+    json res = json::array();
+    for (size_t r = 0; r < mod.resources.size(); ++r) {
+        const GlslResource& g = mod.resources[r];
+        json j = {{"name", g.name},         {"binding", g.binding},   {"set", g.set},
+                  {"glsl_type", g.glslType}, {"node", g.nodeId},       {"node_type", g.nodeType},
+                  {"resource", g.resource},  {"kind", graph::resourceKindName(g.kind)}, {"format", "RGBA32F"}};
+        if (!g.file.empty()) j["file"] = g.file;
+        if (r < images.size()) {
+            const graph::ResourceImage& img = images[r];
+            j["colorspace"] = img.colorspace;
+            json levels = json::array();
+            for (size_t l = 0; l < img.levels.size(); ++l) {
+                json lv = {{"width", img.levels[l].width}, {"height", img.levels[l].height}};
+                if (r < levelFiles.size() && l < levelFiles[r].size()) lv["exr"] = levelFiles[r][l];
+                levels.push_back(lv);
+            }
+            j["levels"] = levels;
+            j["generate_mipmaps"] = img.generateMipmaps;
+            j["min_filter"] = img.minFilter;
+            j["mag_filter"] = img.magFilter;
+            j["wrap_s"] = img.wrapS;
+            j["wrap_t"] = img.wrapT;
+        }
+        res.push_back(j);
+    }
+    m["resources"] = res;
+    return m;
+}
+
+json writeGlslResources(const GlslModule& mod, const std::vector<graph::ResourceImage>& images, const std::string& dir,
+                        const ColorConfig& color) {
+    namespace fs = std::filesystem;
+    if (!fs::is_directory(dir)) throw IoError("resource folder '" + dir + "' does not exist");
+    std::vector<std::vector<std::string>> files(images.size());
+    for (size_t r = 0; r < images.size() && r < mod.resources.size(); ++r) {
+        for (size_t l = 0; l < images[r].levels.size(); ++l) {
+            const graph::ResourceImage::Level& lv = images[r].levels[l];
+            ImageSet set;
+            set.width = lv.width;
+            set.height = lv.height;
+            AovBuffer b;
+            b.name = "beauty";
+            b.channelNames = {"R", "G", "B", "A"};
+            b.pixels.resize(size_t(lv.width) * lv.height * 4);
+            for (int y = 0; y < lv.height; ++y)  // EXR rows run top to bottom; GL row 0 is the bottom one
+                std::copy_n(&lv.rgba[size_t(lv.height - 1 - y) * lv.width * 4], size_t(lv.width) * 4,
+                            &b.pixels[size_t(y) * lv.width * 4]);
+            set.aovs.push_back(std::move(b));
+            set.metadata["specula:resource"] = mod.resources[r].name;
+            std::string name = mod.resources[r].name + "_l" + std::to_string(l) + ".exr";
+            writeExr((fs::path(dir) / name).string(), set, color);
+            files[r].push_back(name);
+        }
+    }
+    json m = glslManifest(mod, images, files);
+    std::string path = (fs::path(dir) / "manifest.json").string(), tmp = path + ".tmp";
+    {
+        std::ofstream out(tmp);
+        if (!(out << m.dump(1) << "\n")) throw IoError("cannot write '" + path + "'");
+    }
+    fs::rename(tmp, path);
+    return m;
+}
+
+}  // namespace specula::codegen
