@@ -10,6 +10,8 @@
 #include <limits>
 #include <memory>
 #include <new>
+#include <string>
+#include <utility>
 #include <type_traits>
 #include <vector>
 
@@ -71,6 +73,9 @@ struct BsdfSample {
     LobeKind kind = LobeKind::Diffuse;  // category of the lobe that generated wi
 };
 
+// Named parameter values a lobe reports (BsdfLobe::parameters).
+using LobeParameters = std::vector<std::pair<std::string, std::vector<double>>>;
+
 // One scattering lobe. All directions are unit vectors in the lobe's local frame.
 class BsdfLobe {
 public:
@@ -82,6 +87,10 @@ public:
     virtual bool sample(const LobeQuery& q, const Vec2& u, Vec3& wi) const = 0;
     // Directional albedo estimate ∫ f cos dwi (used for lobe selection and the albedo AOV).
     virtual Color3 albedo(const Vec3& wo) const = 0;
+    // For tools (specula bsdf) and tests: the lobe's model name and its parameters as evaluated for q, e.g. the
+    // filtered roughness matrix of a filtered GGX lobe. Not used while rendering.
+    virtual const char* modelName() const = 0;
+    virtual void parameters(const LobeQuery& q, LobeParameters& out) const {}
     // Analytic integration over a polygonal emitter (LTC area lights, Heitz et al. 2016):
     // result = ∫_P f(wo, wi) |cos θi| dωi, the polygon's vertices given in the local frame relative to
     // the shading point (not normalised, counter-clockwise seen from the shading point). The light's

@@ -17,7 +17,11 @@
 #include <OpenImageIO/imageio.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cstdio>
+#include <iostream>
+#include <limits>
+#include <map>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -142,11 +146,132 @@ Vec3 falseColour(float t) {
     return glm::clamp(c0 + t * (c1 + t * (c2 + t * (c3 + t * (c4 + t * (c5 + t * c6))))), Vec3(0.f), Vec3(1.f));
 }
 
+// A 3x5 pixel font for the colour-bar labels (digits, '.', 'e', '+', '-'), drawn at 2x in white.
+void drawText(std::vector<float>& img, int W, int H, int x0, int y0, const std::string& t) {
+    static const std::map<char, const char*> glyphs = {
+        {'0', "111101101101111"}, {'1', "010110010010111"}, {'2', "111001111100111"}, {'3', "111001111001111"},
+        {'4', "101101111001001"}, {'5', "111100111001111"}, {'6', "111100111101111"}, {'7', "111001001001001"},
+        {'8', "111101111101111"}, {'9', "111101111001111"}, {'.', "000000000000010"}, {'e', "000111101110111"},
+        {'+', "000010111010000"}, {'-', "000000111000000"}};
+    for (size_t k = 0; k < t.size(); ++k) {
+        auto it = glyphs.find(t[k]);
+        if (it == glyphs.end()) continue;
+        for (int gy = 0; gy < 5; ++gy)
+            for (int gx = 0; gx < 3; ++gx) {
+                if (it->second[gy * 3 + gx] != '1') continue;
+                for (int sy = 0; sy < 2; ++sy)
+                    for (int sx = 0; sx < 2; ++sx) {
+                        int x = x0 + int(k) * 8 + gx * 2 + sx, y = y0 + gy * 2 + sy;
+                        if (x < 0 || y < 0 || x >= W || y >= H) continue;
+                        for (int c = 0; c < 3; ++c) img[(size_t(y) * W + x) * 3 + c] = 1.f;
+                    }
+            }
+    }
+}
+
 // The first GGX lobe of a closure, if any.
 const GgxLobe* findGgx(const Closure& c) {
     for (int i = 0; i < c.size(); ++i)
         if (auto* g = dynamic_cast<const GgxLobe*>(c.lobe(i))) return g;
     return nullptr;
+}
+
+
+// One `specula bsdf` query: the shading point's differentials and the light, as strings from the command line or
+// values from a --batch JSON line (same names without the dashes; vectors as arrays).
+struct BsdfRequestArgs {
+    std::string file, material, wo, wi, uv = "0.5,0.5", duvdx = "0,0", duvdy = "0,0";
+    std::string dpdx = "0,0,0", dpdy = "0,0,0", dndx = "0,0,0", dndy = "0,0,0", dwodx = "0,0,0", dwody = "0,0,0";
+    float lightDistance = std::numeric_limits<float>::infinity();
+
+    void fromJson(const json& q) {
+        if (!q.is_object()) throw UsageError("a --batch line must be a JSON object");
+        static const std::vector<std::string> keys = {"material", "wo", "wi", "uv", "duvdx", "duvdy", "dpdx", "dpdy",
+                                                      "dndx", "dndy", "dwodx", "dwody", "light_distance"};
+        for (auto it = q.begin(); it != q.end(); ++it) {
+            const std::string& k = it.key();
+            if (std::find(keys.begin(), keys.end(), k) == keys.end())
+                throw InputError("/" + k, "unknown query key '" + k + "'", nearestName(k, keys));
+            const json& v = it.value();
+            if (k == "material") {
+                material = v.get<std::string>();
+            } else if (k == "light_distance") {
+                lightDistance = v.is_null() ? std::numeric_limits<float>::infinity() : v.get<float>();
+            } else {
+                if (!v.is_array() || v.size() < 2 || v.size() > 3)
+                    throw InputError("/" + k, "'" + k + "' must be an array of 2 or 3 numbers");
+                std::string t;
+                for (size_t i = 0; i < v.size(); ++i) t += (i ? "," : "") + std::to_string(v[i].get<double>());
+                std::string* dst = k == "wo" ? &wo : k == "wi" ? &wi : k == "uv" ? &uv : k == "duvdx" ? &duvdx : k == "duvdy" ? &duvdy
+                                 : k == "dpdx" ? &dpdx : k == "dpdy" ? &dpdy : k == "dndx" ? &dndx : k == "dndy" ? &dndy
+                                 : k == "dwodx" ? &dwodx : &dwody;
+                *dst = t;
+            }
+        }
+        if (wo.empty() || wi.empty()) throw UsageError("a query needs \"wo\" and \"wi\"");
+    }
+};
+
+// Materials of one file, instantiated once each (texture loads, graph compilation).
+class MaterialCache {
+public:
+    explicit MaterialCache(std::string file) : file_(std::move(file)) {}
+    const MaterialInstance& get(const std::string& name) {
+        auto it = cache_.find(name);
+        if (it != cache_.end()) return it->second;
+        Loaded l = readMaterial(file_, name);
+        return cache_.emplace(name, instantiate(l)).first->second;
+    }
+
+private:
+    std::string file_;
+    std::map<std::string, MaterialInstance> cache_;
+};
+
+json vecJson(const Vec3& v) { return json::array({v.x, v.y, v.z}); }
+
+// Shades the point described by r and answers its query: f·cos (total, diffuse, specular), the mixture pdf
+// (visible-normal sampling pdf of Closure::sample, not renormalised over the hemisphere), and every lobe with its
+// weight, frame, own f·cos and pdf and its model parameters for this query (e.g. a filtered roughness matrix).
+json evaluateBsdf(MaterialCache& cache, const BsdfRequestArgs& r) {
+    Vec3 wo = glm::normalize(parseVec3(r.wo, "wo")), wi = glm::normalize(parseVec3(r.wi, "wi"));
+    const MaterialInstance& mi = cache.get(r.material);
+    ShadingPoint sp = localPoint(parseVec2(r.uv, "uv"), parseVec2(r.duvdx, "duvdx"), parseVec2(r.duvdy, "duvdy"), wo);
+    sp.dpdx = parseVec3(r.dpdx, "dpdx"), sp.dpdy = parseVec3(r.dpdy, "dpdy");
+    sp.dndx = parseVec3(r.dndx, "dndx"), sp.dndy = parseVec3(r.dndy, "dndy");
+    sp.dwodx = parseVec3(r.dwodx, "dwodx"), sp.dwody = parseVec3(r.dwody, "dwody");
+    sp.hasDifferentials = sp.hasDifferentials || sp.dpdx != Vec3(0.f) || sp.dpdy != Vec3(0.f) || sp.dndx != Vec3(0.f) ||
+                          sp.dndy != Vec3(0.f) || sp.dwodx != Vec3(0.f) || sp.dwody != Vec3(0.f);
+    if (!(r.lightDistance > 0.f)) throw UsageError("light distance must be > 0");
+    ScratchArena arena;
+    Closure cl;
+    mi.material->shade(sp, arena, cl);
+    BsdfQuery q;
+    q.wo = wo;
+    q.wi = wi;
+    q.lightDistance = r.lightDistance;
+    BsdfValue v = cl.evalPdf(q);
+    json lobes = json::array();
+    for (int i = 0; i < cl.size(); ++i) {
+        const Frame& f = cl.frame(i);
+        LobeQuery lq{f.toLocal(wo), f.toLocal(wi), q.lightDistance};
+        LobeValue lv = cl.lobe(i)->evalPdf(lq);
+        LobeParameters params;
+        cl.lobe(i)->parameters(lq, params);
+        json pj = json::object();
+        for (auto& [name, values] : params) pj[name] = values.size() == 1 ? json(values[0]) : json(values);
+        lobes.push_back({{"model", cl.lobe(i)->modelName()},
+                         {"kind", cl.lobe(i)->kind() == LobeKind::Diffuse ? "diffuse" : "specular"},
+                         {"weight", vecJson(cl.weight(i))},
+                         {"normal", vecJson(f.n)},
+                         {"tangent", vecJson(f.t)},
+                         {"f", vecJson(lv.f)},
+                         {"pdf", lv.pdf},
+                         {"parameters", pj}});
+    }
+    Color3 f = v.f.total();
+    return {{"f", vecJson(f)}, {"f_diffuse", vecJson(v.f.diffuse)}, {"f_specular", vecJson(v.f.specular)},
+            {"pdf", v.pdf}, {"lobes", lobes}};
 }
 
 }  // namespace
@@ -192,41 +317,60 @@ void addGraphCommands(CLI::App& app, int& exitCode) {
     });
 
     // ---- specula bsdf ----
-    auto* bsdf = app.add_subcommand("bsdf", "Evaluate a graph material's f·cos and pdf for one direction pair");
-    struct BsdfArgs {
-        std::string file, material, wo, wi, uv = "0.5,0.5", dx = "0,0", dy = "0,0";
-    };
-    auto b = std::make_shared<BsdfArgs>();
+    auto* bsdf = app.add_subcommand("bsdf", "Evaluate a graph material at one shading point: f·cos, pdf and every lobe, for one query "
+                                            "or (--batch) one JSON query per stdin line");
+    auto b = std::make_shared<BsdfRequestArgs>();
+    auto batch = std::make_shared<bool>(false);
     bsdf->add_option("file", b->file, "scene or material-library JSON")->required();
     bsdf->add_option("--material", b->material, "material name");
-    bsdf->add_option("--wo", b->wo, "outgoing direction X,Y,Z (local frame, z = normal)")->required();
-    bsdf->add_option("--wi", b->wi, "incident direction X,Y,Z (local frame, z = normal)")->required();
+    bsdf->add_option("--wo", b->wo, "outgoing direction X,Y,Z (local frame of the surface, z = normal, x = tangent)");
+    bsdf->add_option("--wi", b->wi, "incident direction X,Y,Z (same frame)");
     bsdf->add_option("--uv", b->uv, "texture coordinates U,V (default 0.5,0.5)");
-    bsdf->add_option("--duvdx", b->dx, "footprint d(uv)/dx A,B (default 0,0)");
-    bsdf->add_option("--duvdy", b->dy, "footprint d(uv)/dy C,D (default 0,0)");
+    bsdf->add_option("--duvdx", b->duvdx, "footprint d(uv)/dx A,B (default 0,0)");
+    bsdf->add_option("--duvdy", b->duvdy, "footprint d(uv)/dy C,D (default 0,0)");
+    bsdf->add_option("--dpdx", b->dpdx, "dP/dx X,Y,Z per pixel (default 0,0,0)");
+    bsdf->add_option("--dpdy", b->dpdy, "dP/dy X,Y,Z per pixel");
+    bsdf->add_option("--dndx", b->dndx, "dN/dx X,Y,Z per pixel");
+    bsdf->add_option("--dndy", b->dndy, "dN/dy X,Y,Z per pixel");
+    bsdf->add_option("--dwodx", b->dwodx, "dwo/dx X,Y,Z per pixel (0: orthographic view)");
+    bsdf->add_option("--dwody", b->dwody, "dwo/dy X,Y,Z per pixel");
+    bsdf->add_option("--light-distance", b->lightDistance, "distance to a point light along wi (default: a direction, +inf)");
+    bsdf->add_flag("--batch", *batch, "read one JSON query per stdin line, write one JSON answer per stdout line");
     bsdf->callback([=, &exitCode] {
         exitCode = run([&] {
-            Vec3 wo = glm::normalize(parseVec3(b->wo, "--wo")), wi = glm::normalize(parseVec3(b->wi, "--wi"));
-            Loaded l = readMaterial(b->file, b->material);
-            MaterialInstance mi = instantiate(l);
-            ShadingPoint sp = localPoint(parseVec2(b->uv, "--uv"), parseVec2(b->dx, "--duvdx"), parseVec2(b->dy, "--duvdy"), wo);
-            ScratchArena arena;
-            Closure cl;
-            mi.material->shade(sp, arena, cl);
-            BsdfQuery q;
-            q.wo = wo;
-            q.wi = wi;
-            BsdfValue v = cl.evalPdf(q);
-            Color3 f = v.f.total();
-            json j = {{"f", {f.x, f.y, f.z}}, {"pdf", v.pdf}};
-            std::printf("%s\n", j.dump().c_str());
+            if (!*batch) {
+                if (b->wo.empty() || b->wi.empty()) throw UsageError("--wo and --wi are required (or --batch)");
+                MaterialCache cache(b->file);
+                std::printf("%s\n", evaluateBsdf(cache, *b).dump().c_str());
+                return;
+            }
+            // One process, one material load per material name; a bad line gets an error answer and sets exit 1.
+            MaterialCache cache(b->file);
+            std::string line;
+            bool failed = false;
+            for (int n = 1; std::getline(std::cin, line); ++n) {
+                if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+                json answer;
+                try {
+                    json q = json::parse(line);
+                    BsdfRequestArgs r = *b;
+                    r.fromJson(q);
+                    answer = evaluateBsdf(cache, r);
+                } catch (const std::exception& e) {
+                    answer = {{"error", e.what()}, {"line", n}};
+                    failed = true;
+                }
+                std::printf("%s\n", answer.dump().c_str());
+                std::fflush(stdout);
+            }
+            if (failed) throw InputError("", "some --batch queries failed (see their \"error\" answers)");
         });
     });
 
     // ---- specula plot ----
     auto* plot = app.add_subcommand("plot", "Plot a material's lobe (f·cos over the projected hemisphere) and its GGX slope-space NDF");
     struct PlotArgs {
-        std::string file, material, wo, out;
+        std::string file, material, wo, out, raw, uv = "0.5,0.5", duvdx = "0,0", duvdy = "0,0";
         int size = 256;
     };
     auto p = std::make_shared<PlotArgs>();
@@ -235,18 +379,23 @@ void addGraphCommands(CLI::App& app, int& exitCode) {
     plot->add_option("--wo", p->wo, "outgoing direction X,Y,Z (local frame, z = normal)")->required();
     plot->add_option("-o,--output", p->out, "output image (PNG)")->required();
     plot->add_option("--size", p->size, "panel size in pixels (default 256)");
+    plot->add_option("--uv", p->uv, "texture coordinates U,V of the shading point (default 0.5,0.5)");
+    plot->add_option("--duvdx", p->duvdx, "footprint d(uv)/dx A,B (default 0,0)");
+    plot->add_option("--duvdy", p->duvdy, "footprint d(uv)/dy C,D (default 0,0)");
+    plot->add_option("--raw", p->raw, "also write the float values as an EXR (beauty: f·cos RGB of the lobe panel; 'ndf' layer)");
     plot->callback([=, &exitCode] {
         exitCode = run([&] {
             Vec3 wo = glm::normalize(parseVec3(p->wo, "--wo"));
             if (p->size < 16 || p->size > 4096) throw UsageError("--size must be in [16, 4096]");
             Loaded l = readMaterial(p->file, p->material);
             MaterialInstance mi = instantiate(l);
-            ShadingPoint sp = localPoint(Vec2(0.5f), Vec2(0.f), Vec2(0.f), wo);
+            ShadingPoint sp = localPoint(parseVec2(p->uv, "--uv"), parseVec2(p->duvdx, "--duvdx"), parseVec2(p->duvdy, "--duvdy"), wo);
             ScratchArena arena;
             Closure cl;
             mi.material->shade(sp, arena, cl);
-            const int S = p->size, bar = 16, gap = 8, W = 2 * S + gap, H = S + gap + bar;
+            const int S = p->size, bar = 16, label = 14, gap = 8, W = 2 * S + gap, H = S + gap + bar + label;
             std::vector<float> lobe(size_t(S) * S, -1.f), ndf(size_t(S) * S, -1.f);
+            std::vector<float> lobeRgb(size_t(S) * S * 3, 0.f);
             float lobeMax = 0.f, ndfMax = 0.f;
             const GgxLobe* g = findGgx(cl);
             float range = g ? std::clamp(3.f * std::max(g->alphaX(), g->alphaY()), 0.05f, 4.f) : 1.f;
@@ -258,7 +407,9 @@ void addGraphCommands(CLI::App& app, int& exitCode) {
                         BsdfQuery q;
                         q.wo = wo;
                         q.wi = wi;
-                        float val = luminance(cl.evalPdf(q).f.total());
+                        Color3 fc = cl.evalPdf(q).f.total();
+                        float val = luminance(fc);
+                        std::copy(&fc.x, &fc.x + 3, &lobeRgb[(size_t(y) * S + x) * 3]);
                         lobe[size_t(y) * S + x] = val;
                         lobeMax = std::max(lobeMax, val);
                     }
@@ -277,22 +428,46 @@ void addGraphCommands(CLI::App& app, int& exitCode) {
                     put(x, y, a < 0.f ? Vec3(0.15f) : falseColour(lobeMax > 0.f ? a / lobeMax : 0.f));
                     put(S + gap + x, y, b < 0.f ? Vec3(0.15f) : falseColour(ndfMax > 0.f ? b / ndfMax : 0.f));
                 }
-            for (int y = S + gap; y < H; ++y)
+            for (int y = S + gap; y < S + gap + bar; ++y)
                 for (int x = 0; x < S; ++x) {
                     Vec3 c = falseColour(float(x) / (S - 1));
                     put(x, y, c);
                     if (g) put(S + gap + x, y, c);
                 }
+            // Labels under each bar: 0 on the left, the value of the top colour on the right.
+            auto text = [&](int x0, int y0, const std::string& t, bool right) {
+                int w = int(t.size()) * 8;
+                drawText(img, W, H, right ? x0 - w : x0, y0, t);
+            };
+            char buf[32];
+            text(0, S + gap + bar + 2, "0", false);
+            std::snprintf(buf, sizeof buf, "%.3g", lobeMax);
+            text(S, S + gap + bar + 2, buf, true);
+            if (g) {
+                text(S + gap, S + gap + bar + 2, "0", false);
+                std::snprintf(buf, sizeof buf, "%.3g", ndfMax);
+                text(W, S + gap + bar + 2, buf, true);
+            }
             auto out = OIIO::ImageOutput::create(p->out);
             if (!out) throw IoError("cannot write '" + p->out + "': unsupported format");
             OIIO::ImageSpec spec(W, H, 3, OIIO::TypeDesc::UINT8);
             std::ostringstream desc;
             desc << "specula plot: left = luminance of f*cos over the projected hemisphere (0.." << lobeMax
                  << "), right = GGX slope-space NDF P22 over slopes [-" << range << "," << range << "]^2 (0.." << ndfMax
-                 << "); colour bars below map 0..max";
+                 << "); colour bars below map 0..max (labelled)";
             spec.attribute("ImageDescription", desc.str());
             if (!out->open(p->out, spec) || !out->write_image(OIIO::TypeDesc::FLOAT, img.data()) || !out->close())
                 throw IoError("cannot write '" + p->out + "': " + out->geterror());
+            if (!p->raw.empty()) {
+                ImageSet raw;
+                raw.width = raw.height = S;
+                raw.aovs.push_back({"beauty", {"R", "G", "B"}, lobeRgb});
+                std::vector<float> nd(ndf.size());
+                for (size_t i = 0; i < nd.size(); ++i) nd[i] = std::max(ndf[i], 0.f);
+                raw.aovs.push_back({"ndf", {"Y"}, nd});
+                raw.metadata["specula:plot"] = "beauty: f*cos over the projected hemisphere wi = (x, y, sqrt(1-x^2-y^2)); ndf: GGX P22";
+                writeExr(p->raw, raw, *ColorConfig::load("builtin"));
+            }
             json j = {{"lobe_max", lobeMax}, {"ndf_max", ndfMax}, {"slope_range", g ? range : 0.f}, {"has_ggx", g != nullptr}};
             std::printf("%s\n", j.dump().c_str());
         });

@@ -11,6 +11,7 @@
 #include <csignal>
 #include <filesystem>
 #include <sys/wait.h>
+#include <sstream>
 #include <thread>
 #include <unistd.h>
 
@@ -245,4 +246,78 @@ TEST(Cli, GlslResourcesWritesAManifestAndEveryLevel) {
     fs::copy_file(tubes, copy);
     EXPECT_EQ(test::runCli("glsl " + q(copy) + " -o " + q(copy), &out), 2) << out;
     EXPECT_EQ(test::readFile(copy), test::readFile(tubes));
+}
+
+// specula bsdf drives a whole shading point: the differentials a filtered lobe reads change its filtered roughness
+// matrix, the light distance changes a half-vector filter, lobes add up to the total, and --batch answers every line.
+TEST(Cli, BsdfDrivesTheShadingPointAndBatches) {
+    std::string dir = test::tempDir("cli-bsdf");
+    test::writeFile(dir + "/m.json", R"({"materials": {
+        "f": {"nodes": {"spec": {"type": "bsdf.ggx_filtered", "inputs": {"alpha": [0.05, 0.05], "filter": "projected_approx"}},
+                        "d": {"type": "bsdf.diffuse", "inputs": {"color": 0.25}},
+                        "sum": {"type": "closure.add", "inputs": {"a": "@d.bsdf", "b": "@spec.bsdf"}}},
+              "output": "@sum.bsdf"}}})");
+    auto bsdf = [&](const std::string& extra) {
+        std::string out;
+        EXPECT_EQ(test::runCli("bsdf " + q(dir + "/m.json") + " --wo 0.3,0,0.95 --wi -0.25,0.05,0.96 " + extra, &out), 0) << out;
+        return nlohmann::json::parse(out);
+    };
+    auto filteredA = [](const nlohmann::json& j) {
+        for (const auto& l : j["lobes"])
+            if (l["model"] == "ggx_filtered") return l["parameters"]["filtered_roughness_matrix"][0].get<double>();
+        return -1.0;
+    };
+    nlohmann::json plain = bsdf(""), curved = bsdf("--dndx 0.05,0,0 --dndy 0,0.05,0");
+    EXPECT_NEAR(filteredA(plain), 0.05 * 0.05, 1e-6);  // no derivatives: A itself
+    EXPECT_GT(filteredA(curved), 1.2 * filteredA(plain));  // curvature widens the lobe (measured 1.32x for dn = 0.05)
+    nlohmann::json moving = bsdf("--dpdx 0.02,0,0 --dpdy 0,0.02,0 --light-distance 0.5"), far = bsdf("--dpdx 0.02,0,0 --dpdy 0,0.02,0");
+    EXPECT_GT(filteredA(moving), filteredA(far));  // a near point light turns dP into dwi
+    // Per-lobe f·cos times weight adds up to the total; the lobe list names its models.
+    ASSERT_EQ(curved["lobes"].size(), 2u);
+    for (int c = 0; c < 3; ++c) {
+        double sum = 0;
+        for (const auto& l : curved["lobes"]) sum += l["weight"][c].get<double>() * l["f"][c].get<double>();
+        EXPECT_NEAR(sum, curved["f"][c].get<double>(), 1e-6);
+    }
+    EXPECT_EQ(curved["lobes"][0]["model"], "lambert");
+    // --batch: one answer per line, in order, from one process; a bad line answers an error and the exit code is 1.
+    test::writeFile(dir + "/q.jsonl", R"({"wo": [0.3, 0, 0.95], "wi": [-0.25, 0.05, 0.96]}
+{"wo": [0.3, 0, 0.95], "wi": [-0.25, 0.05, 0.96], "dndx": [0.05, 0, 0], "dndy": [0, 0.05, 0]}
+{"wo": [0.3, 0, 0.95], "wii": [1, 0, 0]}
+)");
+    std::string out;
+    EXPECT_EQ(test::runCli("bsdf " + q(dir + "/m.json") + " --batch < " + q(dir + "/q.jsonl"), &out), 1) << out;
+    std::istringstream lines(out);
+    std::vector<nlohmann::json> answers;
+    for (std::string l; std::getline(lines, l);)
+        if (!l.empty() && l[0] == '{') answers.push_back(nlohmann::json::parse(l));
+    ASSERT_EQ(answers.size(), 3u) << out;
+    EXPECT_DOUBLE_EQ(filteredA(answers[0]), filteredA(plain));
+    EXPECT_DOUBLE_EQ(filteredA(answers[1]), filteredA(curved));
+    EXPECT_NE(answers[2]["error"].get<std::string>().find("did you mean 'wi'"), std::string::npos) << answers[2].dump();
+}
+
+// specula plot --raw writes the lobe panel's float values: a pixel equals specula bsdf for its direction.
+TEST(Cli, PlotRawValuesEqualBsdfQueries) {
+    std::string dir = test::tempDir("cli-plot");
+    const std::string demo = test::sourcePath("examples/demo.json");
+    std::string out;
+    ASSERT_EQ(test::runCli("plot " + q(demo) + " --material copper_satin --wo 0.4,0,0.9 --size 64 -o " + q(dir + "/p.png") +
+                               " --raw " + q(dir + "/p.exr"),
+                           &out),
+              0)
+        << out;
+    ImageSet raw = readImageSet(dir + "/p.exr");
+    ASSERT_EQ(raw.width, 64);
+    const AovBuffer* beauty = raw.find("beauty");
+    ASSERT_NE(beauty, nullptr);
+    ASSERT_NE(raw.find("ndf"), nullptr);
+    const int x = 40, y = 20;
+    float u = (x + 0.5f) / 64 * 2 - 1, v = 1 - (y + 0.5f) / 64 * 2;
+    char wi[96];
+    std::snprintf(wi, sizeof wi, "%.9g,%.9g,%.9g", u, v, std::sqrt(1.f - u * u - v * v));
+    ASSERT_EQ(test::runCli("bsdf " + q(demo) + " --material copper_satin --wo 0.4,0,0.9 --wi " + wi, &out), 0) << out;
+    nlohmann::json j = nlohmann::json::parse(out);
+    for (int c = 0; c < 3; ++c)
+        EXPECT_NEAR(beauty->pixels[(size_t(y) * 64 + x) * 3 + c], j["f"][c].get<float>(), 1e-5f * std::max(1.f, j["f"][c].get<float>()));
 }

@@ -356,6 +356,7 @@ public:
     LobeValue evalPdf(const LobeQuery& q) const override { return lambert_.evalPdf(q); }
     bool sample(const LobeQuery& q, const Vec2& u, Vec3& wi) const override { return lambert_.sample(q, u, wi); }
     Color3 albedo(const Vec3& wo) const override { return albedo_; }
+    const char* modelName() const override { return "analytic_lambert"; }
     bool integratePolygon(const LobeQuery&, const Vec3* v, int n, Color3& result) const override {
         double sum = 0;
         for (int i = 0; i < n; ++i) {

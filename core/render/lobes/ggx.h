@@ -97,6 +97,9 @@ public:
     // Approximation used only for lobe selection and the albedo AOV.
     Color3 albedo(const Vec3& wo) const override { return tint_ * fresnel_.eval(std::max(wo.z, 0.f)); }
 
+    const char* modelName() const override { return "ggx"; }
+    void parameters(const LobeQuery&, LobeParameters& out) const override { out.push_back({"alpha", {ax_, ay_}}); }
+
     float alphaX() const { return ax_; }
     float alphaY() const { return ay_; }
 

@@ -22,6 +22,10 @@ public:
         return wi.z > 0.f;
     }
     Color3 albedo(const Vec3&) const override { return albedo_; }
+    const char* modelName() const override { return "lambert"; }
+    void parameters(const LobeQuery&, LobeParameters& out) const override {
+        out.push_back({"albedo", {albedo_.x, albedo_.y, albedo_.z}});
+    }
 
 private:
     Color3 albedo_;

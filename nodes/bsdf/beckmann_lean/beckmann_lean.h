@@ -141,6 +141,11 @@ public:
         return wi.z > 0.f;
     }
     Color3 albedo(const Vec3& wo) const override { return fresnel_.eval(std::max(wo.z, 0.f)); }
+    const char* modelName() const override { return "beckmann_lean"; }
+    void parameters(const LobeQuery&, LobeParameters& out) const override {
+        out.push_back({"mean_slope", {g_.mean.x, g_.mean.y}});
+        out.push_back({"slope_covariance", {g_.a, g_.b, g_.c}});  // (var_x, var_y, cov_xy)
+    }
     const lean::SlopeGaussian& gaussian() const { return g_; }
 
 private:

@@ -374,6 +374,16 @@ public:
     }
     Color3 albedo(const Vec3& wo) const override { return tint_ * fresnel_.eval(std::max(wo.z, 0.f)); }
 
+    const char* modelName() const override { return "ggx_filtered"; }
+    // Roughness matrices as (a, c, d) of [[a, c], [c, d]]: unfiltered A, filtered Ā for the query, sampling Ā_s.
+    void parameters(const LobeQuery& q, LobeParameters& out) const override {
+        Sym2 Ab = filtered(D3(q.wo), D3(q.wi), invLightDistance(q.lightDistance));
+        out.push_back({"roughness_matrix", {s_.A.a, s_.A.c, s_.A.d}});
+        out.push_back({"filtered_roughness_matrix", {Ab.a, Ab.c, Ab.d}});
+        out.push_back({"sampling_roughness_matrix", {sampling_.a, sampling_.c, sampling_.d}});
+        out.push_back({"filtered_alpha", {std::sqrt(Ab.a), std::sqrt(Ab.d)}});
+    }
+
     const Sym2& unfiltered() const { return s_.A; }
     const Sym2& samplingMatrix() const { return sampling_; }
     double tau() const { return tau_; }

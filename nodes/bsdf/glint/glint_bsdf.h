@@ -459,6 +459,14 @@ public:
     Color3 albedo(const Vec3& wo) const override {
         return fresnel_.eval(std::max(wo.z, 0.f)) * std::clamp(p_.relArea, 0.f, 1.f);
     }
+    const char* modelName() const override { return "glint"; }
+    void parameters(const LobeQuery&, LobeParameters& out) const override {
+        out.push_back({"sigma", {p_.sigmaX, p_.sigmaY}});
+        out.push_back({"rho", {p_.rho}});
+        out.push_back({"log_density", {p_.logDensity}});
+        out.push_back({"ggaa", {p_.ggaa ? 1.0 : 0.0}});
+        out.push_back({"footprint_duv", {in_.duvdx.x, in_.duvdx.y, in_.duvdy.x, in_.duvdy.y}});
+    }
     const GlintParams& params() const { return p_; }
     const GlintEvalInputs& inputs() const { return in_; }
 
