@@ -15,6 +15,7 @@ namespace {
 struct Params {
     ImageWrap wrap;  // read by prepare() as its string
     Vec2 uv, duvdx, duvdy;
+    float uvScale;
 };
 const NodeParams<Params> kParams = NodeParams<Params>()
     .str("file", "image path (relative to the scene file)")
@@ -22,7 +23,8 @@ const NodeParams<Params> kParams = NodeParams<Params>()
     .choice("wrap", &Params::wrap, "wrap mode (sampler state)").uniform()
     .v2("uv", &Params::uv, Vec2(0.f), "texture coordinates").range(-1.f, 2.f).bind(GeomBinding::UV)
     .v2("duvdx", &Params::duvdx, Vec2(0.f), "footprint: d(uv)/dx").range(-0.01f, 0.01f).bind(GeomBinding::DUVDX)
-    .v2("duvdy", &Params::duvdy, Vec2(0.f), "footprint: d(uv)/dy").range(-0.01f, 0.01f).bind(GeomBinding::DUVDY);
+    .v2("duvdy", &Params::duvdy, Vec2(0.f), "footprint: d(uv)/dy").range(-0.01f, 0.01f).bind(GeomBinding::DUVDY)
+    .f("uv_scale", &Params::uvScale, 1.f, "multiplies uv and its footprint (tiling that keeps the filter right)").range(0.5f, 4.f);
 OutputList kOutputs;
 const OutPort<Vec3> kColor = kOutputs.add<Vec3>("color", TypeDesc::Color3, "RGB in the working space");
 const OutPort<float> kAlpha = kOutputs.add<float>("alpha", TypeDesc::Float, "alpha (1 if the file has none)");
@@ -82,7 +84,7 @@ void cpu(EvalContext& c, const Instr& i) {
     const auto* d = static_cast<const ImageData*>(i.data);
     const Params p = kParams.read(c, i);
     float px[4];
-    d->store->sample(d->handle, p.uv, p.duvdx, p.duvdy, px, 4, d->wrap);
+    d->store->sample(d->handle, p.uv * p.uvScale, p.duvdx * p.uvScale, p.duvdy * p.uvScale, px, 4, d->wrap);
     set(c, i, kColor, Vec3(px[0], px[1], px[2]));
     set(c, i, kAlpha, px[3]);
 }

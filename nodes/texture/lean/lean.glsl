@@ -92,11 +92,11 @@ void spc_lean_lookup(sampler2D tex, vec2 uv, vec2 duvdx, vec2 duvdy, int filt, i
     }
 }
 void spc_texture_lean(sampler2D moments, int convention, int filter_, int correlation, int wrap, float strength, vec2 uv,
-                      vec2 duvdx, vec2 duvdy, vec3 normal, vec3 tangent, float sign_, out vec3 normal_out, out vec2 slope,
-                      out vec3 sigma_rho, out vec3 covariance) {
+                      vec2 duvdx, vec2 duvdy, vec3 normal, vec3 tangent, float sign_, float uv_scale, out vec3 normal_out,
+                      out vec2 slope, out vec3 sigma_rho, out vec3 covariance) {
     vec4 m;
     float mxy;
-    spc_lean_lookup(moments, uv, duvdx, duvdy, filter_, wrap, m, mxy);
+    spc_lean_lookup(moments, uv * uv_scale, duvdx * uv_scale, duvdy * uv_scale, filter_, wrap, m, mxy);
     // leanStats (core/texture/lean_moments.cpp): flip y for DirectX maps and for left-handed frames.
     bool flip = (convention == SPC_NORMAL_MAP_DIRECTX) != (sign_ < 0.0);
     float sy = flip ? -1.0 : 1.0;

@@ -40,7 +40,7 @@ struct Params {
     float strength;
     Vec2 uv, duvdx, duvdy;
     Vec3 normal, tangent;
-    float sign;
+    float sign, uvScale;
 };
 const NodeParams<Params> kParams = NodeParams<Params>()
     .str("file", "tangent-space normal map, colour = (n + 1)/2, read as raw data (relative to the scene file)")
@@ -56,7 +56,8 @@ const NodeParams<Params> kParams = NodeParams<Params>()
     .v2("duvdy", &Params::duvdy, Vec2(0.f), "footprint: d(uv)/dy").range(-0.5f, 0.5f).bind(GeomBinding::DUVDY)
     .n3("normal", &Params::normal, Vec3(0, 0, 1), "unperturbed surface normal").bind(GeomBinding::N)
     .v3("tangent", &Params::tangent, Vec3(1, 0, 0), "tangent (+u)").bind(GeomBinding::T)
-    .f("sign", &Params::sign, 1.f, "bitangent sign (+v = sign N x T)").range(-1.f, 1.f).bind(GeomBinding::TSign);
+    .f("sign", &Params::sign, 1.f, "bitangent sign (+v = sign N x T)").range(-1.f, 1.f).bind(GeomBinding::TSign)
+    .f("uv_scale", &Params::uvScale, 1.f, "multiplies uv and its footprint (tiling that keeps the filter right)").range(0.5f, 4.f);
 OutputList kOutputs;
 const OutPort<Vec3> kNormal = kOutputs.add<Vec3>("normal", TypeDesc::Normal3, "mean normal normalize(-E[x], -E[y], 1) in world space");
 const OutPort<Vec2> kSlope = kOutputs.add<Vec2>("slope", TypeDesc::Vec2, "mean slope (E[x], E[y]) in the (T, N x T) frame");
@@ -130,7 +131,7 @@ void cpu(EvalContext& c, const Instr& i) {
     const auto* d = static_cast<const LeanData*>(i.data);
     const Params p = kParams.read(c, i);
     static const LeanFilter filters[] = {LeanFilter::Anisotropic, LeanFilter::Trilinear, LeanFilter::None};
-    LeanMoments m = d->pyramid->lookup(p.uv, p.duvdx, p.duvdy, filters[int(p.filter)],
+    LeanMoments m = d->pyramid->lookup(p.uv * p.uvScale, p.duvdx * p.uvScale, p.duvdy * p.uvScale, filters[int(p.filter)],
                                        p.wrap == LeanWrapChoice::Clamp ? LeanWrap::Clamp : LeanWrap::Repeat, 16);
     // Slopes are expressed in the BSDF frame (T, N×T, N): DirectX maps and left-handed frames (sign < 0) flip y.
     const bool flip = (p.convention == NormalMapConvention::DirectX) != (p.sign < 0.f);
