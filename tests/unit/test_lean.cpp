@@ -68,6 +68,20 @@ Vec3 randomDir(std::mt19937& rng, float minZ) {
     }
 }
 
+// ∫ f cos dωi by importance sampling the lobe with a fixed stratified sequence; 'zeroPdf' counts samples whose pdf is 0.
+double sampledAlbedo(const BeckmannLeanLobe& lobe, const Vec3& wo, int ns, int* zeroPdf = nullptr) {
+    double est = 0;
+    for (int i = 0; i < ns; ++i) {
+        Vec2 u((i + 0.5f) / ns, float((uint64_t(i) * 2654435769ULL % ns) + 0.5) / ns);
+        Vec3 wi;
+        if (!lobe.sample(wo, u, wi)) continue;
+        float p = lobe.pdf(wo, wi);
+        if (p > 0.f) est += lobe.eval(wo, wi).x / p;
+        else if (zeroPdf) ++*zeroPdf;
+    }
+    return est / ns;
+}
+
 }  // namespace
 
 // ---- moments and pyramids ------------------------------------------------------------------------------
@@ -308,17 +322,9 @@ TEST(BeckmannLean, SamplingMatchesPdfAndEnergyIsBounded) {
     BeckmannLeanLobe lobe(g, Fresnel::one());
     const Vec3 wo = glm::normalize(Vec3(0.3f, 0.1f, 1.f));
     // Estimate ∫ f cos by importance sampling and by a hemisphere quadrature; each must agree and be <= 1.
-    const int ns = 200000;
-    double est = 0;
-    for (int i = 0; i < ns; ++i) {
-        Vec2 u((i + 0.5f) / ns, float((uint64_t(i) * 2654435769ULL % ns) + 0.5) / ns);
-        Vec3 wi;
-        if (!lobe.sample(wo, u, wi)) continue;
-        float p = lobe.pdf(wo, wi);
-        ASSERT_GT(p, 0.f);
-        est += lobe.eval(wo, wi).x / p;
-    }
-    est /= ns;
+    int zeroPdf = 0;
+    double est = sampledAlbedo(lobe, wo, 200000, &zeroPdf);
+    ASSERT_EQ(zeroPdf, 0);
     const int n = 800;
     double quad = 0, pdfInt = 0;
     for (int i = 0; i < n; ++i) {
@@ -339,19 +345,114 @@ TEST(BeckmannLean, SamplingMatchesPdfAndEnergyIsBounded) {
     EXPECT_LE(pdfInt, 1.0 + 1e-3);
 }
 
-TEST(BeckmannLean, SmithLambdaReducesToBeckmannAndGrowsTowardsTheMean) {
+TEST(BeckmannLean, SmithLambdaReducesToBeckmannAndIsMeasuredAgainstTheMeanPlane) {
     for (float alpha : {0.1f, 0.4f, 0.9f})
         for (float z : {0.2f, 0.5f, 0.9f}) {
             Vec3 w(std::sqrt(1 - z * z), 0.f, z);
             lean::SlopeGaussian g = lean::makeSlopeGaussian(Vec2(0.f), Vec3(0.f), alpha);
             EXPECT_NEAR(lean::lambda(g, w), beckmannLambda(glm::dvec3(w), alpha), 2e-6 + 1e-5 * beckmannLambda(glm::dvec3(w), alpha));
         }
-    // Facets tilted towards w (mean slope −x for w along +x: normals ∝ (0.3, 0, 1)) present more projected area
-    // than cos θ, so the Smith normalisation G1 = cos θ / A⁺ masks more (Λ grows); tilted away, Λ shrinks.
+    // Facets tilted towards w (mean slope −x for w along +x: mean normal ∝ (0.3, 0, 1)) make w less grazing with
+    // respect to the mean plane, so Λ shrinks; tilted away, w is more grazing and Λ grows.
     Vec3 w = glm::normalize(Vec3(1.f, 0.f, 0.6f));
     lean::SlopeGaussian c = lean::makeSlopeGaussian(Vec2(0.f), Vec3(0.f), 0.3f);
     lean::SlopeGaussian toward = lean::makeSlopeGaussian(Vec2(-0.3f, 0.f), Vec3(0.f), 0.3f);
     lean::SlopeGaussian away = lean::makeSlopeGaussian(Vec2(0.3f, 0.f), Vec3(0.f), 0.3f);
-    EXPECT_GT(lean::lambda(toward, w), lean::lambda(c, w));
-    EXPECT_LT(lean::lambda(away, w), lean::lambda(c, w));
+    EXPECT_LT(lean::lambda(toward, w), lean::lambda(c, w));
+    EXPECT_GT(lean::lambda(away, w), lean::lambda(c, w));
+    // A pure tilt of an isotropic Gaussian seen along the tilt axis' normal plane: for w ⟂ μ in xy, e(w) = wz and
+    // the variance along wxy is the material's, so Λ equals plain Beckmann's.
+    lean::SlopeGaussian side = lean::makeSlopeGaussian(Vec2(0.f, 0.3f), Vec3(0.f), 0.3f);
+    EXPECT_NEAR(lean::lambda(side, w), beckmannLambda(glm::dvec3(w), 0.3), 1e-5);
+}
+
+// The closed-form Λ against a quadrature of the NDF itself: 1 + Λ(w) = ∫ (w·m)⁺ D(m) dω_m / e(w), and the signed
+// projected area ∫ (w·m) D(m) dω_m is the mean plane's, e(w) = wz − wxy·μ (the identity Smith's G1 normalises to).
+TEST(BeckmannLean, MaskingMatchesAQuadratureOfTheNdf) {
+    struct C {
+        Vec2 mean;
+        Vec3 cov;
+        float alpha;
+        Vec3 w;
+    };
+    const C cases[] = {{Vec2(0.f), Vec3(0.f), 0.5f, glm::normalize(Vec3(0.8f, 0.1f, 0.5f))},
+                       {Vec2(0.3f, -0.1f), Vec3(0.f), 0.5f, glm::normalize(Vec3(0.8f, 0.1f, 0.5f))},
+                       {Vec2(-0.25f, 0.2f), Vec3(0.04f, 0.02f, 0.01f), 0.4f, glm::normalize(Vec3(-0.5f, 0.6f, 0.3f))},
+                       {Vec2(0.4f, 0.f), Vec3(0.02f, 0.f, 0.f), 0.6f, glm::normalize(Vec3(1.f, 0.f, 0.45f))},  // e ≈ 0.05
+                       {Vec2(0.1f, 0.1f), Vec3(0.01f, 0.03f, -0.01f), 0.3f, glm::normalize(Vec3(0.2f, -0.9f, 0.2f))}};
+    const int n = 1000;
+    for (const C& c : cases) {
+        lean::SlopeGaussian g = lean::makeSlopeGaussian(c.mean, c.cov, c.alpha);
+        double pos = 0, sgn = 0;
+        for (int i = 0; i < n; ++i) {
+            double th = (i + 0.5) / n * kPiD / 2, st = std::sin(th), ct = std::cos(th);
+            for (int j = 0; j < 2 * n; ++j) {
+                double ph = (j + 0.5) / (2 * n) * 2 * kPiD;
+                glm::dvec3 m(st * std::cos(ph), st * std::sin(ph), ct);
+                double d = lean::ndf(g, Vec3(m)) * st, wm = glm::dot(m, glm::dvec3(c.w));
+                pos += std::max(wm, 0.0) * d, sgn += wm * d;
+            }
+        }
+        const double dA = (kPiD / 2 / n) * (2 * kPiD / (2 * n));
+        pos *= dA, sgn *= dA;
+        double e = lean::meanPlaneCosine(g, c.w);
+        double want = 1 + lean::lambda(g, c.w);
+        std::printf("  mean (%.2f %.2f) w.z %.3f e %.4f: quadrature 1+Λ %.5f, closed form %.5f; signed area %.5f\n",
+                    c.mean.x, c.mean.y, c.w.z, e, pos / e, want, sgn);
+        EXPECT_NEAR(sgn, e, 2e-3);
+        EXPECT_NEAR(pos / e, want, 3e-3 * want);
+    }
+}
+
+// The grazing case: a viewer (or light) below the mean microsurface plane (e ≤ 0 while wz > 0) sees nothing, and G1
+// goes to 0 continuously as the view approaches that plane from above (A⁺ → s φ(0) while e → 0).
+TEST(BeckmannLean, ViewBelowTheMeanPlaneIsFullyMasked) {
+    lean::SlopeGaussian g = lean::makeSlopeGaussian(Vec2(0.5f, 0.f), Vec3(0.01f, 0.01f, 0.f), 0.3f);
+    // e(w) = wz − 0.5 wx: zero at θ = atan(2) ≈ 63.4° towards +x.
+    const double th0 = std::atan(2.0);
+    double prevG1 = 1;
+    for (double dth : {-0.4, -0.2, -0.1, -0.03, -0.01, -0.001}) {
+        double th = th0 + dth;
+        Vec3 w(float(std::sin(th)), 0.f, float(std::cos(th)));
+        double e = lean::meanPlaneCosine(g, w), g1 = 1 / (1 + double(lean::lambda(g, w)));
+        double s = std::sqrt(double(w.x) * w.x * g.a);
+        EXPECT_LT(g1, prevG1) << "G1 must fall towards the mean plane";
+        EXPECT_LE(g1, e / (0.3989422804 * s) * 1.0001) << "G1 = e / A⁺ with A⁺ ≥ s φ(0)";
+        prevG1 = g1;
+    }
+    EXPECT_LT(prevG1, 0.02);
+    BeckmannLeanLobe lobe(g, Fresnel::one());
+    const Vec3 wi = glm::normalize(Vec3(-0.3f, 0.1f, 1.f));
+    for (double dth : {0.001, 0.05, 0.3}) {
+        double th = th0 + dth;
+        Vec3 w(float(std::sin(th)), 0.f, float(std::cos(th)));  // above the geometric plane, below the mean plane
+        ASSERT_GT(w.z, 0.f);
+        EXPECT_LE(lean::meanPlaneCosine(g, w), 0.f);
+        EXPECT_GE(lean::lambda(g, w), 1e29f);
+        EXPECT_EQ(lobe.eval(w, wi), Color3(0.f)) << "viewer below the mean plane";
+        EXPECT_EQ(lobe.eval(wi, w), Color3(0.f)) << "light below the mean plane";
+    }
+}
+
+// A tilted mirror (Σ = 0, α → 0, mean slope μ) reflects all it receives (albedo → 1 with F = 1) for a view well
+// above its mean plane, as the same mirror shaded in its own frame does; the lobe is reciprocal in the mean-plane
+// measure f·cos(wo, wi) / e(wi).
+TEST(BeckmannLean, TiltedMirrorKeepsItsRadianceAndIsReciprocalOverTheMeanPlane) {
+    lean::SlopeGaussian g = lean::makeSlopeGaussian(Vec2(0.3f, -0.2f), Vec3(0.f), 0.02f);
+    BeckmannLeanLobe lobe(g, Fresnel::one());
+    for (Vec3 wo : {glm::normalize(Vec3(0.2f, 0.1f, 1.f)), glm::normalize(Vec3(-0.6f, 0.3f, 1.f))}) {
+        double est = sampledAlbedo(lobe, wo, 100000);
+        std::printf("  tilted mirror, wo.z %.3f, e(wo) %.3f: albedo %.4f\n", wo.z, lean::meanPlaneCosine(g, wo), est);
+        EXPECT_NEAR(est, 1.0, 0.01);
+    }
+    std::mt19937 rng(5);
+    lean::SlopeGaussian rough = lean::makeSlopeGaussian(Vec2(0.3f, -0.2f), Vec3(0.02f, 0.01f, 0.005f), 0.3f);
+    BeckmannLeanLobe rl(rough, Fresnel::one());
+    for (int k = 0; k < 200; ++k) {
+        Vec3 a = randomDir(rng, 0.05f), b = randomDir(rng, 0.05f);
+        double ea = lean::meanPlaneCosine(rough, a), eb = lean::meanPlaneCosine(rough, b);
+        if (ea <= 0 || eb <= 0) continue;
+        double x = rl.eval(a, b).x / eb, y = rl.eval(b, a).x / ea;
+        EXPECT_NEAR(x, y, 1e-4 * std::max(x, y) + 1e-9);
+    }
 }

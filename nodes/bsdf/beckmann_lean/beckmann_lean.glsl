@@ -1,6 +1,7 @@
-// bsdf.beckmann_lean: f·cos = weight · F(wo·h) D(h) G2(wo, wi) / (4 wo.z), the GLSL twin of BeckmannLeanLobe
+// bsdf.beckmann_lean: f·cos = weight · F(wo·h) D(h) G2(wo, wi) / (4 e(wo)), the GLSL twin of BeckmannLeanLobe
 // (nodes/bsdf/beckmann_lean/beckmann_lean.h): D(h) = P22(slope(h)) / hz^4 with P22 the Gaussian of mean `slope` and
-// covariance Σ + (α²/2) I (Olano & Baker 2010), Smith Λ of the shifted Gaussian, G2 = 1/(1 + Λo + Λi).
+// covariance Σ + (α²/2) I (Olano & Baker 2010), Smith Λ of the shifted Gaussian over its mean plane,
+// Λ = A⁺/e − 1 with e(w) = w.z − w.xy·slope, G2 = 1/(1 + Λo + Λi); zero below the mean plane (e ≤ 0).
 float spc_lean_normal_cdf(float d) {
     float x = abs(d) * 0.70710678118654752;
     float t = 1.0 / (1.0 + 0.3275911 * x);
@@ -9,19 +10,18 @@ float spc_lean_normal_cdf(float d) {
     return d >= 0.0 ? 1.0 - halfc : halfc;
 }
 float spc_lean_lambda(vec3 w, vec2 mean, float a, float b, float c) {
-    if (w.z <= 0.0) return 1e30;
-    float m = w.x * mean.x + w.y * mean.y;
+    float e = w.z - (w.x * mean.x + w.y * mean.y);
+    if (w.z <= 0.0 || e <= 0.0) return 1e30;
     float s2 = w.x * w.x * a + 2.0 * w.x * w.y * c + w.y * w.y * b;
-    float e = w.z - m;
     float ap;
     if (s2 > 0.0) {
         float s = sqrt(s2);
         float d = e / s;
         ap = e * spc_lean_normal_cdf(d) + s * 0.39894228040143268 * exp(-0.5 * d * d);
     } else {
-        ap = max(e, 0.0);
+        ap = e;
     }
-    return max(ap / w.z - 1.0, 0.0);
+    return max(ap / e - 1.0, 0.0);
 }
 void spc_bsdf_beckmann_lean(SpeculaClosureQuery q, vec3 weight, float roughness, vec2 slope, vec3 covariance, int fresnel,
                             vec3 f0, float ior, vec3 eta, vec3 k, vec3 normal, vec3 tangent, out SpeculaClosure bsdf) {
@@ -41,13 +41,15 @@ void spc_bsdf_beckmann_lean(SpeculaClosureQuery q, vec3 weight, float roughness,
     vec3 o, i, h;
     if (!spc_reflection_local(q.wo, q.wi, normal, tangent, o, i, h)) return;
     if (h.z <= 0.0) return;
+    float eo = o.z - (o.x * slope.x + o.y * slope.y);
+    if (eo <= 0.0 || i.z - (i.x * slope.x + i.y * slope.y) <= 0.0) return;
     float z2 = h.z * h.z;
     float dx = -h.x / h.z - slope.x, dy = -h.y / h.z - slope.y;
     float qf = (b * dx * dx - 2.0 * c * dx * dy + a * dy * dy) / det;
     float d = exp(-0.5 * qf) / (2.0 * SPC_PI * sqrt(det)) / (z2 * z2);
     if (d == 0.0) return;
     float g = 1.0 / (1.0 + spc_lean_lambda(o, slope, a, b, c) + spc_lean_lambda(i, slope, a, b, c));
-    float val = d * g / (4.0 * o.z);
+    float val = d * g / (4.0 * eo);
     float cw = dot(o, h);
     vec3 F = vec3(1.0);
     if (fresnel == SPC_FRESNEL_SCHLICK) F = spc_fresnel_schlick(cw, f0);

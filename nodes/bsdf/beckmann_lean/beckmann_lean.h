@@ -60,31 +60,48 @@ inline float ndf(const SlopeGaussian& g, const Vec3& h) {
     return slopePdf(g, Vec2(-h.x / h.z, -h.y / h.z)) / (z2 * z2);
 }
 
-// Smith Λ for a Gaussian slope distribution with non-zero mean. With r = wx x~ + wy y~ ~ N(m, s²)
-// (m = wxy·μ, s² = wxyᵀ Σ wxy), the projected area of the facets visible from w is
-//   A⁺(w) = ∫ max(0, w·m̂) D(m̂) dm̂ = E[(wz − r)⁺] = (wz − m) Φ(d) + s φ(d),  d = (wz − m)/s
-// (Heitz 2014, §5.3 / Eq. 72 in slope space; the same construction as LEADR mapping, Dupuy et al. 2013), and
-// Λ = A⁺/wz − 1, clamped to >= 0. For μ = 0 this is exactly Beckmann's Λ = (erf(a) − 1)/2 + e^(−a²)/(2a√π),
-// a = cot θ / α (Walter et al. 2007, Eq. 27 with Heitz's Λ form).
+// Masking with a mean slope (issue 9 item 7, docs/conformance.md §LEAN). A non-zero mean slope μ tilts the
+// microsurface: its mean plane has the (unnormalised) normal n̄ = (−μx, −μy, 1), and a unit area of the geometric
+// plane carries a mean-plane area whose projection towards w is
+//   e(w) = w·n̄ = wz − wxy·μ                                       (meanPlaneCosine)
+// (the signed projected area of the microfacets, ∫ (w·m) D(m) dm = E[wz − r] = e(w)). The lobe is Smith's
+// microsurface model over that mean plane (Heitz 2014 §2-5, with the LEADR reading of a mean slope, Dupuy et al.
+// 2013): with r = wxy·s ~ N(m, s²) over the slopes s of the Gaussian (m = wxy·μ, s² = wxyᵀ Σ wxy), the projected
+// area of the facets visible from w is
+//   A⁺(w) = ∫ max(0, w·m̂) D(m̂) dm̂ = E[(wz − r)⁺] = e Φ(e/s) + s φ(e/s)
+// (Heitz 2014 Eq. 72 in slope space), and
+//   Λ(w) = A⁺(w) / e(w) − 1  (≥ 0 by Jensen),   G1(w) = 1 / (1 + Λ(w)) = e / A⁺,   G1 = 0 for e(w) ≤ 0:
+// a viewer (or light) below the mean microsurface plane sees (lights) none of it, and G1 → 0 continuously as e → 0⁺
+// (A⁺ → s φ(0) > 0). The earlier model divided by wz instead of e and clamped Λ at 0, so G1 was 1 below the mean
+// plane. For μ = 0 both are exactly Beckmann's Λ = (erf(a) − 1)/2 + e^(−a²)/(2a√π), a = cot θ / α (Walter et al.
+// 2007, Eq. 27 with Heitz's Λ form). Returns 1e30 (G1 = 0) for e ≤ 0 or wz ≤ 0.
+inline float meanPlaneCosine(const SlopeGaussian& g, const Vec3& w) { return w.z - (w.x * g.mean.x + w.y * g.mean.y); }
+
 inline float lambda(const SlopeGaussian& g, const Vec3& w) {
-    if (w.z <= 0.f) return 1e30f;
-    float m = w.x * g.mean.x + w.y * g.mean.y;
+    float e = meanPlaneCosine(g, w);
+    if (w.z <= 0.f || e <= 0.f) return 1e30f;
     float s2 = w.x * w.x * g.a + 2.f * w.x * w.y * g.c + w.y * w.y * g.b;
-    float e = w.z - m;
     float ap;
     if (s2 > 0.f) {
         float s = std::sqrt(s2);
         float d = e / s;
         ap = e * normalCdf(d) + s * 0.39894228040143268f * std::exp(-0.5f * d * d);
     } else {
-        ap = std::max(e, 0.f);
+        ap = e;
     }
-    return std::max(ap / w.z - 1.f, 0.f);
+    return std::max(ap / e - 1.f, 0.f);  // the clamp only absorbs float rounding
 }
 
-// f·cos = F(wo·h) D(h) G2(wo, wi) / (4 wo.z), G2 height-correlated = 1/(1 + Λ(wo) + Λ(wi)) (Heitz 2014, Eq. 99).
+// f·cos = F(wo·h) D(h) G2(wo, wi) / (4 e(wo)), G2 height-correlated = 1/(1 + Λ(wo) + Λ(wi)) (Heitz 2014, Eq. 99):
+// the Cook-Torrance lobe of the mean plane (D per unit mean-plane area is D n̂z with n̂ = n̄/|n̄|,
+// and e(wo) = (wo·n̂)/n̂z),
+// so a tilted mirror (Σ → 0, α → 0) keeps the radiance it reflects (albedo → F), ∫ f cos dωi ≤ F, and the lobe is
+// reciprocal in the mean-plane measure: f·cos(wo, wi) / e(wi) = F D G2 / (4 e(wo) e(wi)) is symmetric. Zero when
+// wo or wi is below the geometric plane or below the mean plane.
 inline float evalNoFresnel(const SlopeGaussian& g, const Vec3& wo, const Vec3& wi, Vec3* hOut = nullptr) {
     if (wo.z <= 0.f || wi.z <= 0.f) return 0.f;
+    float eo = meanPlaneCosine(g, wo);
+    if (eo <= 0.f || meanPlaneCosine(g, wi) <= 0.f) return 0.f;
     Vec3 h = wo + wi;
     float len = std::sqrt(glm::dot(h, h));
     if (len == 0.f) return 0.f;
@@ -93,7 +110,7 @@ inline float evalNoFresnel(const SlopeGaussian& g, const Vec3& wo, const Vec3& w
     float d = ndf(g, h);
     if (d == 0.f) return 0.f;
     float g2 = 1.f / (1.f + lambda(g, wo) + lambda(g, wi));
-    return d * g2 / (4.f * wo.z);
+    return d * g2 / (4.f * eo);
 }
 
 }  // namespace specula::lean
