@@ -662,6 +662,7 @@ public:
         return true;
     }
     Color3 albedo(const Vec3&) const override { return Color3(1.f); }
+    const char* modelName() const override { return "mismatched_test_lobe"; }
 
 private:
     float k_;
