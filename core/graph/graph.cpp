@@ -336,10 +336,17 @@ Program Program::compile(const GraphDesc& g, const std::vector<std::pair<int, in
     };
     std::vector<std::pair<int, uint16_t>> closureOuts;  // (node, register) of kept closure outputs
 
+    // Outputs read by a live node or named as roots (Instr::usedOutputs).
+    std::vector<uint8_t> usedOut(g.nodes.size(), 0);
+    for (int ni : live)
+        for (const InputValue& v : g.nodes[ni].inputs)
+            if (v.kind == InputValue::Kind::Connection) usedOut[v.srcNode] |= uint8_t(1u << v.srcPort);
+    for (auto& r : roots) usedOut[r.first] |= uint8_t(1u << r.second);
     for (int ni : live) {
         const NodeInstance& n = g.nodes[ni];
         const NodeSpec& spec = *n.spec;
         Instr ins;
+        ins.usedOutputs = usedOut[ni];
         std::fill(std::begin(ins.in), std::end(ins.in), kNoRegister);
         std::fill(std::begin(ins.out), std::end(ins.out), kNoRegister);
         ins.fn = spec.cpu;

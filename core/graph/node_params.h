@@ -65,6 +65,11 @@ inline void set(EvalContext& c, const Instr& i, OutPort<T> o, const T& v) {
     static_assert(sizeof(T) % sizeof(float) == 0 && !std::is_same_v<T, ClosureRef>, "numeric outputs only");
     std::memcpy(c.r + i.out[o.index], &v, sizeof(T));
 }
+// Whether output o is read by another node or is a program root: lazy outputs (e.g. texture gradients) skip work.
+template <class T>
+inline bool wanted(const Instr& i, OutPort<T> o) {
+    return (i.usedOutputs >> o.index) & 1;
+}
 // The closure (and its emission) of a closure output.
 inline int slotOf(const EvalContext& c, const Instr& i, OutPort<ClosureRef> o) { return int(c.r[i.out[o.index]]); }
 

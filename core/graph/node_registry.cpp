@@ -22,6 +22,8 @@ const char* bindingName(GeomBinding b) {
         case GeomBinding::T: return "T";
         case GeomBinding::TSign: return "Tsign";
         case GeomBinding::NdotV: return "NdotV";
+        case GeomBinding::DNDX: return "dNdx";
+        case GeomBinding::DNDY: return "dNdy";
     }
     return "";
 }
@@ -32,6 +34,8 @@ TypeDesc bindingType(GeomBinding b) {
         case GeomBinding::DUVDX:
         case GeomBinding::DUVDY: return TypeDesc::Vec2;
         case GeomBinding::P:
+        case GeomBinding::DNDX:
+        case GeomBinding::DNDY:
         case GeomBinding::T: return TypeDesc::Vector3;
         case GeomBinding::N:
         case GeomBinding::Ng: return TypeDesc::Normal3;
@@ -54,6 +58,8 @@ const char* bindingGlsl(GeomBinding b) {
         case GeomBinding::T: return "s.tangent.xyz";
         case GeomBinding::TSign: return "s.tangent.w";
         case GeomBinding::NdotV: return "dot(s.normal, q.wo)";
+        case GeomBinding::DNDX: return "s.dNdx";
+        case GeomBinding::DNDY: return "s.dNdy";
     }
     return "";
 }
@@ -72,6 +78,8 @@ void loadBinding(GeomBinding b, const ShadingPoint& sp, float* d) {
         case GeomBinding::T: v3(Vec3(sp.tangent)); break;
         case GeomBinding::TSign: d[0] = sp.tangent.w; break;
         case GeomBinding::NdotV: d[0] = glm::dot(sp.n, sp.wo); break;
+        case GeomBinding::DNDX: v3(sp.dndx); break;
+        case GeomBinding::DNDY: v3(sp.dndy); break;
     }
 }
 

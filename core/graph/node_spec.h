@@ -34,7 +34,9 @@ enum class GeomBinding : uint8_t {
     Ng,      // normal3 sp.ng           s.geometric_normal
     T,       // vector3 sp.tangent.xyz  s.tangent.xyz
     TSign,   // float   sp.tangent.w    s.tangent.w
-    NdotV,   // float   dot(sp.n, sp.wo)  dot(s.normal, wo)
+    NdotV,   // float   dot(sp.n, sp.wo)  dot(s.normal, q.wo)
+    DNDX,    // vector3 sp.dndx         s.dNdx   (screen derivative of the surface's shading normal)
+    DNDY,    // vector3 sp.dndy         s.dNdy
 };
 const char* bindingName(GeomBinding b);
 TypeDesc bindingType(GeomBinding b);
@@ -205,6 +207,7 @@ struct Instr {
     const void* data = nullptr;  // prepared per-instance data (PrepareFn), owned by the program
     uint16_t in[kMaxInputs];
     uint16_t out[kMaxOutputs];
+    uint8_t usedOutputs = 0xFF;  // bit k: output k is read by another node or is a root (lazy outputs may skip work)
 };
 
 // Per-evaluation state the instruction functions see.

@@ -109,7 +109,7 @@ vec3 spc_ggxf_filtered(vec3 A, vec3 o, vec3 i, int fmode, int kernel, float sigm
 
 void spc_bsdf_ggx_filtered(SpeculaClosureQuery q, SpeculaShadingInputs s, vec3 weight, vec2 alpha, vec3 covariance, int filter_,
                            int kernel, float sigma2, float kappa, int derivatives, float derivative_scale, vec3 f0, vec3 normal,
-                           vec3 tangent, out SpeculaClosure bsdf, out vec2 filtered_alpha) {
+                           vec3 tangent, vec3 dndx, vec3 dndy, out SpeculaClosure bsdf, out vec2 filtered_alpha) {
     bsdf = spc_closure_none();
     filtered_alpha = alpha;
     if (q.kind != SPC_QUERY_DIRECTION) {  // no closed form over polygons: the host samples this lobe
@@ -136,8 +136,8 @@ void spc_bsdf_ggx_filtered(SpeculaClosureQuery q, SpeculaShadingInputs s, vec3 w
         dn0 = spc_to_local(dFdxFine(N), T, B, N) * sc;
         dn1 = spc_to_local(dFdyFine(N), T, B, N) * sc;
     } else {
-        dn0 = spc_to_local(s.dNdx, T, B, N) * sc;
-        dn1 = spc_to_local(s.dNdy, T, B, N) * sc;
+        dn0 = spc_to_local(dndx, T, B, N) * sc;
+        dn1 = spc_to_local(dndy, T, B, N) * sc;
     }
     vec3 dwo0 = spc_to_local(s.dwodx, T, B, N) * sc, dwo1 = spc_to_local(s.dwody, T, B, N) * sc;
     vec3 dwi0 = vec3(0.0), dwi1 = vec3(0.0);

@@ -41,6 +41,7 @@ struct Params {
     float derivativeScale;
     Color3 f0;
     Vec3 normal, tangent;
+    Vec3 dndx, dndy;
 };
 
 const NodeParams<Params> kParams = NodeParams<Params>()
@@ -55,7 +56,9 @@ const NodeParams<Params> kParams = NodeParams<Params>()
     .f("derivative_scale", &Params::derivativeScale, 1.f, "multiplies every screen derivative").range(0.f, 2.f).hard(0.f, 1e3f)
     .c3("f0", &Params::f0, Vec3(0.04f), "Schlick F0 (1 = no Fresnel)").range(0.f, 1.f).hard(0.f, 1.f)
     .n3("normal", &Params::normal, Vec3(0, 0, 1), "shading normal").bind(GeomBinding::N)
-    .v3("tangent", &Params::tangent, Vec3(1, 0, 0), "tangent: direction of α_x").bind(GeomBinding::T);
+    .v3("tangent", &Params::tangent, Vec3(1, 0, 0), "tangent: direction of α_x").bind(GeomBinding::T)
+    .v3("dndx", &Params::dndx, Vec3(0.f), "screen derivative of the normal (connect texture.normal_map dndx)").range(-0.05f, 0.05f).bind(GeomBinding::DNDX)
+    .v3("dndy", &Params::dndy, Vec3(0.f), "screen derivative of the normal along y").range(-0.05f, 0.05f).bind(GeomBinding::DNDY);
 OutputList kOutputs;
 const OutPort<ClosureRef> kBsdf = kOutputs.add<ClosureRef>("bsdf", TypeDesc::Closure, "the specular closure");
 const OutPort<Vec2> kFilteredAlpha =
@@ -102,7 +105,7 @@ void cpu(EvalContext& c, const Instr& i) {
     if (sp && sp->hasDifferentials) {
         s.diff.valid = true;
         s.diff.dwo[0] = loc(sp->dwodx) * scale, s.diff.dwo[1] = loc(sp->dwody) * scale;
-        s.diff.dn[0] = loc(sp->dndx) * scale, s.diff.dn[1] = loc(sp->dndy) * scale;
+        s.diff.dn[0] = loc(p.dndx) * scale, s.diff.dn[1] = loc(p.dndy) * scale;
         s.diff.dp[0] = loc(sp->dpdx) * scale, s.diff.dp[1] = loc(sp->dpdy) * scale;
     }
     if (sp && quad) {

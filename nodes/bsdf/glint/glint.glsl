@@ -133,7 +133,7 @@ vec3 spc_glint_frame_rotation(vec2 a, vec3 w) { return vec3(-a.x * w.z, -a.y * w
 void spc_bsdf_glint(SpeculaClosureQuery q, SpeculaShadingInputs s, sampler1DArray dictionary, vec3 weight, float sigma_x, float sigma_y, float rho,
                     float log_density, float relative_area, float density_jitter, float max_anisotropy, int ggaa,
                     float kernel_scale, int derivative, vec3 f0, vec2 lean_mean, vec3 lean_cov, vec3 normal,
-                    vec3 tangent, vec2 uv, vec2 duvdx, vec2 duvdy, float uv_scale, out SpeculaClosure bsdf) {
+                    vec3 tangent, vec2 uv, vec2 duvdx, vec2 duvdy, float uv_scale, vec3 dndx, vec3 dndy, out SpeculaClosure bsdf) {
     bsdf = spc_closure_none();
     if (q.kind != SPC_QUERY_DIRECTION) {  // no closed form over polygons: the host samples this lobe
         bsdf.partial = true;
@@ -187,7 +187,7 @@ void spc_bsdf_glint(SpeculaClosureQuery q, SpeculaShadingInputs s, sampler1DArra
     gq.gy = vec2(0.0);
     if (gq.ggaa) {
         // Per-pixel dh from the frame rotation (T.dN, B.dN) (C21 §6.1: once per pixel, not per cell).
-        vec2 anx = vec2(dot(T, s.dNdx), dot(B, s.dNdx)), any = vec2(dot(T, s.dNdy), dot(B, s.dNdy));
+        vec2 anx = vec2(dot(T, dndx), dot(B, dndx)), any = vec2(dot(T, dndy), dot(B, dndy));
         // Plus the change of wo (s.dwodx) and, for a point light at q.light_distance, of wi = -(I - wi wi^T) dp / dist.
         vec3 sx3 = spc_glint_frame_rotation(anx, o) + spc_to_local(s.dwodx, T, B, N) + spc_glint_frame_rotation(anx, i);
         vec3 sy3 = spc_glint_frame_rotation(any, o) + spc_to_local(s.dwody, T, B, N) + spc_glint_frame_rotation(any, i);

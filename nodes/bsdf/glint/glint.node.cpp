@@ -39,6 +39,7 @@ struct Params {
     Vec3 normal, tangent;
     Vec2 uv, duvdx, duvdy;
     float uvScale;
+    Vec3 dndx, dndy;
 };
 
 const NodeParams<Params> kParams = NodeParams<Params>()
@@ -61,7 +62,9 @@ const NodeParams<Params> kParams = NodeParams<Params>()
     .v2("uv", &Params::uv, Vec2(0.f), "texture coordinates of the cell grid").range(0.f, 1.f).bind(GeomBinding::UV)
     .v2("duvdx", &Params::duvdx, Vec2(0.f), "footprint: d(uv)/dx").range(-0.01f, 0.01f).bind(GeomBinding::DUVDX)
     .v2("duvdy", &Params::duvdy, Vec2(0.f), "footprint: d(uv)/dy").range(-0.01f, 0.01f).bind(GeomBinding::DUVDY)
-    .f("uv_scale", &Params::uvScale, 1.f, "multiplies uv and its derivatives").range(0.5f, 4.f);
+    .f("uv_scale", &Params::uvScale, 1.f, "multiplies uv and its derivatives").range(0.5f, 4.f)
+    .v3("dndx", &Params::dndx, Vec3(0.f), "screen derivative of the normal (connect texture.normal_map dndx)").range(-0.05f, 0.05f).bind(GeomBinding::DNDX)
+    .v3("dndy", &Params::dndy, Vec3(0.f), "screen derivative of the normal along y").range(-0.05f, 0.05f).bind(GeomBinding::DNDY);
 OutputList kOutputs;
 const OutPort<ClosureRef> kBsdf = kOutputs.add<ClosureRef>("bsdf", TypeDesc::Closure, "the glinty specular closure");
 
@@ -91,8 +94,8 @@ void cpu(EvalContext& c, const Instr& i) {
     ev.duvdx = in.duvdx * in.uvScale;
     ev.duvdy = in.duvdy * in.uvScale;
     if (sp) {
-        ev.diff.dnx = Vec2(glm::dot(f.t, sp->dndx), glm::dot(f.b, sp->dndx));
-        ev.diff.dny = Vec2(glm::dot(f.t, sp->dndy), glm::dot(f.b, sp->dndy));
+        ev.diff.dnx = Vec2(glm::dot(f.t, in.dndx), glm::dot(f.b, in.dndx));
+        ev.diff.dny = Vec2(glm::dot(f.t, in.dndy), glm::dot(f.b, in.dndy));
         ev.diff.dwox = f.toLocal(sp->dwodx);
         ev.diff.dwoy = f.toLocal(sp->dwody);
         ev.diff.dpx = f.toLocal(sp->dpdx);
