@@ -6,12 +6,12 @@
 #include "core/color/color_config.h"
 #include "core/graph/closure_util.h"
 #include "core/graph/graph_material.h"
+#include "core/io/image_io.h"
 #include "core/render/lobes/ggx.h"
 #include "core/texture/texture_store.h"
 #include "core/util/error.h"
 
 #include <CLI/CLI.hpp>
-#include <OpenImageIO/imageio.h>
 #include <nlohmann/json.hpp>
 
 #include <cstdio>
@@ -262,16 +262,11 @@ void addGraphCommands(CLI::App& app, int& exitCode) {
                     put(x, y, c);
                     if (g) put(S + gap + x, y, c);
                 }
-            auto out = OIIO::ImageOutput::create(p->out);
-            if (!out) throw IoError("cannot write '" + p->out + "': unsupported format");
-            OIIO::ImageSpec spec(W, H, 3, OIIO::TypeDesc::UINT8);
             std::ostringstream desc;
             desc << "specula plot: left = luminance of f*cos over the projected hemisphere (0.." << lobeMax
                  << "), right = GGX slope-space NDF P22 over slopes [-" << range << "," << range << "]^2 (0.." << ndfMax
                  << "); colour bars below map 0..max";
-            spec.attribute("ImageDescription", desc.str());
-            if (!out->open(p->out, spec) || !out->write_image(OIIO::TypeDesc::FLOAT, img.data()) || !out->close())
-                throw IoError("cannot write '" + p->out + "': " + out->geterror());
+            writeImage8(p->out, W, H, 3, img.data(), desc.str());  // via libspecula's lazily loaded image I/O
             json j = {{"lobe_max", lobeMax}, {"ndf_max", ndfMax}, {"slope_range", g ? range : 0.f}, {"has_ggx", g != nullptr}};
             std::printf("%s\n", j.dump().c_str());
         });
