@@ -1,15 +1,96 @@
-// Output helpers of the public API.
+// Front-end policies of libspecula (core/api/specula.h).
 #include "core/api/specula.h"
 
+#include <nlohmann/json.hpp>
+
+#include <cstdio>
 #include <filesystem>
+#include <stdexcept>
+
+namespace fs = std::filesystem;
 
 namespace specula {
 
 std::string writeRenderOutputs(const std::string& exrPath, const Scene& scene, const ImageSet& images) {
-    std::string png = std::filesystem::path(exrPath).replace_extension(".png").string();
+    std::string png = fs::path(exrPath).replace_extension(".png").string();
     writeExr(exrPath, images, *scene.colorConfig);
     writePng(png, images, *scene.colorConfig, scene.color.view, scene.color.exposure);
     return png;
+}
+
+std::string partialOutputPath(const std::string& exrPath) {
+    return fs::path(exrPath).replace_extension(".partial.exr").string();
+}
+
+namespace {
+bool samePath(const std::string& a, const std::string& b) {
+    std::error_code ea, eb;
+    fs::path pa = fs::weakly_canonical(a, ea), pb = fs::weakly_canonical(b, eb);
+    return !ea && !eb && pa == pb;
+}
+}  // namespace
+
+void checkOutputPath(const std::string& exrPath, const std::string& inputPath) {
+    if (fs::path(exrPath).extension() != ".exr")
+        throw Error(ErrorCode::Usage, "", "output '" + exrPath + "' must end in .exr (a PNG is written beside it)");
+    if (!inputPath.empty()) {
+        for (const std::string& out : {exrPath, fs::path(exrPath).replace_extension(".png").string(), partialOutputPath(exrPath)})
+            if (samePath(out, inputPath))
+                throw Error(ErrorCode::Usage, "", "output '" + out + "' would overwrite the input '" + inputPath + "'");
+    }
+    fs::path dir = fs::path(exrPath).parent_path();
+    if (!dir.empty() && !fs::is_directory(dir))
+        throw Error(ErrorCode::Io, "", "output folder '" + dir.string() + "' does not exist");
+}
+
+WrittenFiles writeRenderResult(const std::string& exrPath, const Scene& scene, ImageSet& images, const RenderStats& st) {
+    WrittenFiles w;
+    if (st.cancelled) {
+        // Never clobber the target: the partial image goes to a separate file.
+        w.exr = partialOutputPath(exrPath);
+        w.partial = true;
+        images.metadata["specula:partial"] = "true";
+        writeExr(w.exr, images, *scene.colorConfig);
+        return w;
+    }
+    w.exr = exrPath;
+    w.png = writeRenderOutputs(exrPath, scene, images);
+    return w;
+}
+
+int exitCodeFor(const std::exception& e) {
+    if (auto* err = dynamic_cast<const Error*>(&e)) return err->exitCode();
+    if (dynamic_cast<const std::invalid_argument*>(&e)) return kExitUsage;
+    return kExitBadInput;
+}
+
+namespace {
+std::string jsonString(const std::string& s) { return nlohmann::json(s).dump(); }
+}  // namespace
+
+std::string tileEventJson(const RenderProgress& p) {
+    char buf[512];
+    std::snprintf(buf, sizeof buf,
+                  "{\"event\":\"tile\",\"done\":%d,\"total\":%d,\"progress\":%.6f,\"x0\":%d,\"y0\":%d,\"x1\":%d,\"y1\":%d,"
+                  "\"elapsed\":%.3f,\"samples_per_second\":%.1f,\"eta\":%.3f}",
+                  p.tilesDone, p.tilesTotal, p.tilesTotal ? double(p.tilesDone) / p.tilesTotal : 1.0, p.tileX0, p.tileY0,
+                  p.tileX1, p.tileY1, p.elapsedSeconds, p.samplesPerSecond, p.etaSeconds);
+    return buf;
+}
+
+std::string cancelledEventJson(const RenderStats& st, const std::string& partialPath) {
+    return "{\"event\":\"cancelled\",\"done\":" + std::to_string(st.tilesDone) + ",\"total\":" +
+           std::to_string(st.tilesTotal) + ",\"partial\":" + jsonString(partialPath) + "}";
+}
+
+std::string doneEventJson(const RenderStats& st, const std::string& exrPath, const std::string& pngPath) {
+    double sps = st.seconds > 0 ? double(st.samples) / st.seconds : 0.0;
+    char buf[256];
+    std::snprintf(buf, sizeof buf,
+                  "{\"event\":\"done\",\"seconds\":%.3f,\"samples\":%llu,\"invalid_samples\":%llu,"
+                  "\"samples_per_second\":%.1f,",
+                  st.seconds, (unsigned long long)st.samples, (unsigned long long)st.invalidSamples, sps);
+    return buf + std::string("\"exr\":") + jsonString(exrPath) + ",\"png\":" + jsonString(pngPath) + "}";
 }
 
 }  // namespace specula

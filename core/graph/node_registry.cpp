@@ -5,6 +5,7 @@
 #include "core/codegen/glsl_sources.h"
 #include "core/render/shading.h"
 
+#include <mutex>
 #include <cstdio>
 #include <cstdlib>
 
@@ -122,6 +123,8 @@ std::string NodeSpec::glslPrototype() const {
 
 NodeRegistry& NodeRegistry::instance() {
     static NodeRegistry r;
+    static std::once_flag builtins;  // explicit, idempotent and thread-safe: no static-initialisation order
+    std::call_once(builtins, [] { addBuiltinNodes(r); });
     return r;
 }
 

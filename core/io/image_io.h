@@ -62,6 +62,11 @@ CompareResult compareImages(const std::string& pathA, const std::string& pathB, 
 // Writes 'bytes' to path atomically (temp file in the same directory + rename).
 void writeFileAtomic(const std::string& path, const std::string& bytes);
 
+// Writes an 8-bit image of width*height*channels floats in [0,1], rows top to bottom, format from the
+// extension (e.g. `specula plot`), with an optional ImageDescription. Throws IoError.
+void writeImage8(const std::string& path, int width, int height, int channels, const float* pixels,
+                 const std::string& description = "");
+
 // Building blocks of the atomic writes above, for other writers (e.g. the texture cache):
 // creates a unique empty file ".<stem>.tmp-XXXXXX<ext>" next to 'path' and returns its path
 // (throws ImageIoError if the directory does not exist or is not writable) ...

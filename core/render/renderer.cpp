@@ -168,6 +168,9 @@ RenderOutput renderScene(const Scene& scene, const RenderOptions& options) {
             p.elapsedSeconds = std::chrono::duration<double>(Clock::now() - start).count();
             p.samplesPerSecond = p.elapsedSeconds > 0 ? double(samples.load()) / p.elapsedSeconds : 0.0;
             p.etaSeconds = done > 0 ? p.elapsedSeconds * (tileCount - done) / done : 0.0;
+            p.images = &img;
+            p.originX = crop.x0;
+            p.originY = crop.y0;
             options.onTile(p);
         }
     };

@@ -18,6 +18,10 @@ struct RenderProgress {
     double elapsedSeconds = 0;
     double samplesPerSecond = 0;
     double etaSeconds = 0;
+    // The buffers being filled (image = the crop window: pixel (x, y) of the frame is (x - originX, y - originY)).
+    // The finished tile's pixels are final when onTile runs; other tiles may be in flight.
+    const ImageSet* images = nullptr;
+    int originX = 0, originY = 0;
 };
 
 struct RenderStats {
@@ -30,7 +34,8 @@ struct RenderStats {
 
 struct RenderOptions {
     int threads = 0;  // 0 = all cores
-    std::function<void(const RenderProgress&)> onTile;  // called serially, after each finished tile
+    std::function<void(const RenderProgress&)> onTile;  // called serially (under a mutex, from a worker
+                                                        // thread), after each finished tile
     const std::atomic<bool>* cancel = nullptr;          // polled between pixel rows
 };
 

@@ -14,7 +14,31 @@ static std::string formatInputError(const std::string& pointer, const std::strin
 }
 
 InputError::InputError(std::string pointer, std::string message, std::string suggestion)
-    : std::runtime_error(formatInputError(pointer, message, suggestion)),
+    : Error(ErrorCode::BadInput, pointer, message, suggestion, formatInputError(pointer, message, suggestion)) {}
+
+const char* errorCodeName(ErrorCode code) {
+    switch (code) {
+        case ErrorCode::Ok: return "ok";
+        case ErrorCode::BadInput: return "bad_input";
+        case ErrorCode::Usage: return "usage";
+        case ErrorCode::Io: return "io";
+        case ErrorCode::Interrupted: return "interrupted";
+    }
+    return "unknown";
+}
+
+static std::string formatError(const std::string& pointer, const std::string& message, const std::string& suggestion) {
+    std::string s = pointer.empty() ? message : pointer + ": " + message;
+    if (!suggestion.empty()) s += " (did you mean '" + suggestion + "'?)";
+    return s;
+}
+
+Error::Error(ErrorCode code, std::string pointer, std::string message, std::string suggestion)
+    : Error(code, pointer, message, suggestion, formatError(pointer, message, suggestion)) {}
+
+Error::Error(ErrorCode code, std::string pointer, std::string message, std::string suggestion, std::string what)
+    : std::runtime_error(what),
+      code_(code),
       pointer_(std::move(pointer)),
       message_(std::move(message)),
       suggestion_(std::move(suggestion)) {}

@@ -2,6 +2,8 @@
 // "did you mean" suggestion; each error class maps to one documented CLI exit code.
 #pragma once
 
+#include "specula/error.h"
+
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -11,22 +13,17 @@ namespace specula {
 // Documented exit codes of the `specula` CLI (docs/cli.md).
 enum ExitCode : int { kExitOk = 0, kExitBadInput = 1, kExitUsage = 2, kExitIo = 3, kExitInterrupted = 130 };
 
-// Bad scene/graph input. what() = "<pointer>: <message>[ (did you mean '<x>'?)]".
-class InputError : public std::runtime_error {
+// Bad scene/graph input (ErrorCode::BadInput). what() = "<pointer>: <message>[ (did you mean '<x>'?)]"
+// ("/" for an empty pointer).
+class InputError : public Error {
 public:
     InputError(std::string pointer, std::string message, std::string suggestion = "");
-    const std::string& pointer() const { return pointer_; }
-    const std::string& message() const { return message_; }
-    const std::string& suggestion() const { return suggestion_; }
-
-private:
-    std::string pointer_, message_, suggestion_;
 };
 
-// File-system / image I/O failure (exit code 3).
-class IoError : public std::runtime_error {
+// File-system / image I/O failure (exit code 3, ErrorCode::Io).
+class IoError : public Error {
 public:
-    using std::runtime_error::runtime_error;
+    explicit IoError(const std::string& message) : Error(ErrorCode::Io, "", message) {}
 };
 
 // Edit distance (Levenshtein, case-insensitive) used for suggestions.

@@ -7,14 +7,13 @@
 #include "core/color/color_config.h"
 #include "core/graph/closure_util.h"
 #include "core/graph/graph_material.h"
-#include "core/render/lobes/ggx.h"
 #include "core/io/image_io.h"
+#include "core/render/lobes/ggx.h"
 #include "core/texture/texture_store.h"
 #include "plugin/cli/cli_output.h"
 #include "core/util/error.h"
 
 #include <CLI/CLI.hpp>
-#include <OpenImageIO/imageio.h>
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -448,16 +447,11 @@ void addGraphCommands(CLI::App& app, int& exitCode) {
                 std::snprintf(buf, sizeof buf, "%.3g", ndfMax);
                 text(W, S + gap + bar + 2, buf, true);
             }
-            auto out = OIIO::ImageOutput::create(p->out);
-            if (!out) throw IoError("cannot write '" + p->out + "': unsupported format");
-            OIIO::ImageSpec spec(W, H, 3, OIIO::TypeDesc::UINT8);
             std::ostringstream desc;
             desc << "specula plot: left = luminance of f*cos over the projected hemisphere (0.." << lobeMax
                  << "), right = GGX slope-space NDF P22 over slopes [-" << range << "," << range << "]^2 (0.." << ndfMax
                  << "); colour bars below map 0..max (labelled)";
-            spec.attribute("ImageDescription", desc.str());
-            if (!out->open(p->out, spec) || !out->write_image(OIIO::TypeDesc::FLOAT, img.data()) || !out->close())
-                throw IoError("cannot write '" + p->out + "': " + out->geterror());
+            writeImage8(p->out, W, H, 3, img.data(), desc.str());  // via libspecula's lazily loaded image I/O
             if (!p->raw.empty()) {
                 ImageSet raw;
                 raw.width = raw.height = S;

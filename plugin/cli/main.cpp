@@ -48,11 +48,7 @@ void printBar(const RenderProgress& p) {
 }
 
 void printJsonTile(const RenderProgress& p) {
-    std::printf(
-        "{\"event\":\"tile\",\"done\":%d,\"total\":%d,\"progress\":%.6f,\"x0\":%d,\"y0\":%d,\"x1\":%d,\"y1\":%d,"
-        "\"elapsed\":%.3f,\"samples_per_second\":%.1f,\"eta\":%.3f}\n",
-        p.tilesDone, p.tilesTotal, p.tilesTotal ? double(p.tilesDone) / p.tilesTotal : 1.0, p.tileX0, p.tileY0, p.tileX1,
-        p.tileY1, p.elapsedSeconds, p.samplesPerSecond, p.etaSeconds);
+    std::printf("%s\n", tileEventJson(p).c_str());
     std::fflush(stdout);
 }
 
@@ -120,30 +116,18 @@ int main(int argc, char** argv) {
             ov.crop = c;
         }
         if (outPath.empty()) outPath = fs::path(scenePath).stem().string() + ".exr";
-        if (fs::path(outPath).extension() != ".exr") {
-            std::fprintf(stderr, "specula: error: output '%s' must end in .exr (a PNG is written beside it)\n", outPath.c_str());
-            exitCode = kExitUsage;
-            return;
-        }
-        if (!outputFolderExists(outPath)) {
-            exitCode = kExitIo;
+        try {
+            checkOutputPath(outPath, scenePath);  // the output policy lives in libspecula (core/api/specula.h)
+        } catch (const Error& e) {
+            exitCode = reportError(e, e.exitCode());
             return;
         }
         std::string mode = progress.empty() ? (isatty(STDERR_FILENO) ? "bar" : "none") : progress;
         Scene scene;
         try {
             scene = loadSceneForRender(scenePath, ov, shiftOpts);
-        } catch (const std::invalid_argument& e) {
-            exitCode = reportError(e, kExitUsage);
-            return;
-        } catch (const InputError& e) {
-            exitCode = reportError(e, kExitBadInput);
-            return;
-        } catch (const IoError& e) {
-            exitCode = reportError(e, kExitIo);
-            return;
         } catch (const std::exception& e) {
-            exitCode = reportError(e, kExitBadInput);
+            exitCode = reportError(e, exitCodeFor(e));
             return;
         }
         for (const std::string& w : scene.warnings) std::fprintf(stderr, "specula: warning: %s\n", w.c_str());
@@ -159,31 +143,22 @@ int main(int argc, char** argv) {
         if (mode == "bar") std::fprintf(stderr, "\n");
         const RenderStats& st = result.stats;
         try {
-            if (st.cancelled) {
-                // Never clobber the target: the partial image goes to a separate file.
-                std::string partial = fs::path(outPath).replace_extension(".partial.exr").string();
-                result.images.metadata["specula:partial"] = "true";
-                writeExr(partial, result.images, *scene.colorConfig);
+            WrittenFiles w = writeRenderResult(outPath, scene, result.images, st);
+            if (w.partial) {
                 std::fprintf(stderr, "specula: interrupted after %d/%d tiles; partial image written to %s\n", st.tilesDone,
-                             st.tilesTotal, partial.c_str());
-                if (mode == "json")
-                    std::printf("{\"event\":\"cancelled\",\"done\":%d,\"total\":%d,\"partial\":%s}\n", st.tilesDone,
-                                st.tilesTotal, jsonString(partial).c_str());
+                             st.tilesTotal, w.exr.c_str());
+                if (mode == "json") std::printf("%s\n", cancelledEventJson(st, w.exr).c_str());
                 exitCode = kExitInterrupted;
                 return;
             }
-            std::string png = writeRenderOutputs(outPath, scene, result.images);
             double sps = st.seconds > 0 ? double(st.samples) / st.seconds : 0.0;
             if (mode == "json")
-                std::printf("{\"event\":\"done\",\"seconds\":%.3f,\"samples\":%llu,\"invalid_samples\":%llu,"
-                            "\"samples_per_second\":%.1f,\"exr\":%s,\"png\":%s}\n",
-                            st.seconds, (unsigned long long)st.samples, (unsigned long long)st.invalidSamples, sps,
-                            jsonString(outPath).c_str(), jsonString(png).c_str());
+                std::printf("%s\n", doneEventJson(st, w.exr, w.png).c_str());
             else
                 std::fprintf(stderr, "specula: rendered %dx%d at %d spp in %s (%.2f Msamples/s); %llu NaN/Inf samples dropped\n"
                                      "specula: wrote %s and %s\n",
                              result.images.width, result.images.height, scene.render.spp, formatSeconds(st.seconds).c_str(),
-                             sps / 1e6, (unsigned long long)st.invalidSamples, outPath.c_str(), png.c_str());
+                             sps / 1e6, (unsigned long long)st.invalidSamples, w.exr.c_str(), w.png.c_str());
         } catch (const std::exception& e) {
             exitCode = reportError(e, kExitIo);
         }
@@ -232,12 +207,8 @@ int main(int argc, char** argv) {
             Scene s = loadScene(infoScene);
             for (const std::string& w : s.warnings) std::fprintf(stderr, "specula: warning: %s\n", w.c_str());
             std::printf("%s", describeScene(s).c_str());
-        } catch (const InputError& e) {
-            exitCode = reportError(e, kExitBadInput);
-        } catch (const IoError& e) {
-            exitCode = reportError(e, kExitIo);
         } catch (const std::exception& e) {
-            exitCode = reportError(e, kExitBadInput);
+            exitCode = reportError(e, exitCodeFor(e));
         }
     });
 

@@ -5,8 +5,8 @@
 // compared byte for byte with a fresh run (tests/unit/test_nodes_doc.cpp).
 #include "plugin/cli/nodes_command.h"
 
+#include "core/api/node_catalog.h"
 #include "core/codegen/glsl_signature.h"
-
 #include "core/graph/node_spec.h"
 #include "core/io/image_io.h"
 #include "core/util/error.h"
@@ -37,23 +37,8 @@ const char* const kRegenerate = "build/bin/specula nodes --markdown -o docs/node
 
 // ---- formatting helpers ---------------------------------------------------------------------------
 
-// Shortest decimal text that reads back as the same float ("0.04", not "0.0399999991").
-std::string num(float v) {
-    if (std::isnan(v)) return "nan";
-    if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
-    char buf[40];
-    for (int prec = 1; prec <= 9; ++prec) {
-        std::snprintf(buf, sizeof buf, "%.*g", prec, double(v));
-        if (std::strtof(buf, nullptr) == v) {
-            // %g switches to an exponent once the exponent reaches the precision ("1e+01"): widen it for
-            // magnitudes below 1e7 so integers read naturally ("10").
-            int e = int(std::floor(std::log10(std::fabs(double(v)))));
-            if (v != 0.f && e >= prec && e < 7) std::snprintf(buf, sizeof buf, "%.*g", e + 1, double(v));
-            break;
-        }
-    }
-    return buf;
-}
+// Shortest decimal text that reads back as the same float ("0.04", not "0.0399999991"): libspecula's.
+std::string num(float v) { return shortestFloatText(v); }
 
 // A tolerance as written in prose: "1e-4", "2e-4", "0.12" (shortest round-trip digits).
 std::string tolText(float v) {
@@ -70,12 +55,6 @@ std::string tolText(float v) {
     ex = ex.substr(1);
     while (ex.size() > 1 && ex[0] == '0') ex.erase(0, 1);
     return mant + "e" + (neg ? "-" : "") + ex;
-}
-
-// The same value as a JSON number (parsed from the shortest text, so the JSON shows it too).
-ojson jsonNum(float v) {
-    if (!std::isfinite(v)) return nullptr;
-    return std::strtod(num(v).c_str(), nullptr);
 }
 
 std::string vecText(const PortSpec& p) {
@@ -393,71 +372,6 @@ std::string registryMarkdown(const std::vector<const NodeSpec*>& all) {
     return m;
 }
 
-ojson portJson(const PortSpec& p, bool input) {
-    ojson j;
-    j["name"] = p.name;
-    j["type"] = typeName(p.type);
-    if (input) {
-        if (p.type == TypeDesc::String)
-            j["default"] = p.required ? ojson(nullptr) : ojson(p.defString);
-        else if (!isNumeric(p.type))
-            j["default"] = nullptr;
-        else if (typeWidth(p.type) == 1)
-            j["default"] = jsonNum(p.def[0]);
-        else {
-            ojson a = ojson::array();
-            for (int k = 0; k < typeWidth(p.type); ++k) a.push_back(jsonNum(p.def[size_t(k)]));
-            j["default"] = a;
-        }
-        j["required"] = p.required;
-        if (!p.enumValues.empty()) j["enum"] = p.enumValues;
-        j["min"] = jsonNum(p.minValue);
-        j["max"] = jsonNum(p.maxValue);
-        j["soft_min"] = jsonNum(p.softMin);
-        j["soft_max"] = jsonNum(p.softMax);
-        j["hard_min"] = jsonNum(p.hardMin);
-        j["hard_max"] = jsonNum(p.hardMax);
-        j["binding"] = p.binding == GeomBinding::None ? ojson(nullptr) : ojson(bindingName(p.binding));
-    }
-    j["doc"] = p.doc;
-    return j;
-}
-
-ojson nodeJson(const NodeSpec& s) {
-    ojson j;
-    j["id"] = s.id;
-    j["version"] = s.version;
-    j["category"] = s.category;
-    j["doc"] = s.doc;
-    ojson in = ojson::array(), out = ojson::array();
-    for (auto& p : s.inputs) in.push_back(portJson(p, true));
-    for (auto& p : s.outputs) out.push_back(portJson(p, false));
-    j["inputs"] = in;
-    j["outputs"] = out;
-    bool query = false, shading = false;
-    try {
-        for (const codegen::GlslArgRole& r : codegen::bindGlslFunction(s).roles) {
-            query |= r.kind == codegen::GlslArgRole::Query;
-            shading |= r.kind == codegen::GlslArgRole::Shading;
-        }
-    } catch (const std::exception&) {
-    }
-    j["flags"] = {{"pure", s.has(kPure)},
-                  {"needs_derivatives", s.has(kNeedsDerivatives)},
-                  {"emissive", s.has(kEmissive)},
-                  {"glsl_query", query},
-                  {"glsl_shading", shading}};
-    ojson res = ojson::array();
-    for (const ResourceSpec& r : s.resources)
-        res.push_back({{"name", r.name}, {"glsl_type", r.glslType}, {"kind", resourceKindName(r.kind)}, {"doc", r.doc}});
-    j["resources"] = res;
-    j["glsl"] = {{"function", s.glslFunction},
-                 {"file", s.glslFile.empty() ? std::string() : "nodes/" + s.glslFile},
-                 {"prototype", s.glslPrototype()}};
-    j["parity"] = {{"tolerance", jsonNum(s.parityTolerance)}, {"note", s.parityNote}};
-    return j;
-}
-
 std::string listingText(const std::vector<const NodeSpec*>& all) {
     std::vector<std::vector<std::string>> rows;
     for (auto* s : all) rows.push_back({s->id, s->category, s->doc});
@@ -537,10 +451,10 @@ void addNodesCommand(CLI::App& app, int& exitCode) {
         if (o->json) {
             ojson j;
             if (one) {
-                j = nodeJson(*one);
+                j = nodeSpecJson(*one);
             } else {
                 j["nodes"] = ojson::array();
-                for (auto* s : all) j["nodes"].push_back(nodeJson(*s));
+                for (auto* s : all) j["nodes"].push_back(nodeSpecJson(*s));
             }
             text = j.dump(2) + "\n";
         } else if (o->markdown) {
