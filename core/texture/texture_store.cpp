@@ -119,19 +119,32 @@ struct TextureStore::Impl {
     }
 };
 
+namespace {
+// One private TextureSystem for the whole process (no cross-talk with other OIIO users), created on first use and
+// never destroyed. OIIO keeps per-thread tile state per texture system in thread-specific storage: destroying a
+// system while render worker threads live on (one per TextureStore, as before) corrupted that state at random
+// (decr_tiles assertions and crashes in tests that load several scenes). Texture files are content-addressed .tx
+// caches, so a file name never changes meaning while the system lives.
+OIIO::TextureSystem* processTextureSystem() {
+    static OIIO::TextureSystem* ts = [] {
+        OIIO::TextureSystem* t = OIIO::TextureSystem::create(false);
+        t->attribute("automip", 0);
+        t->attribute("autotile", 0);
+        t->attribute("gray_to_rgb", 0);
+        t->attribute("forcefloat", 1);
+        return t;
+    }();
+    return ts;
+}
+}  // namespace
+
 TextureStore::TextureStore(std::shared_ptr<const ColorConfig> color) : impl_(std::make_unique<Impl>()) {
     if (!color) throw TextureError("TextureStore needs a ColorConfig");
     impl_->color = std::move(color);
-    impl_->ts = OIIO::TextureSystem::create(false);  // private cache: no cross-talk with other OIIO users
-    impl_->ts->attribute("automip", 0);
-    impl_->ts->attribute("autotile", 0);
-    impl_->ts->attribute("gray_to_rgb", 0);
-    impl_->ts->attribute("forcefloat", 1);
+    impl_->ts = processTextureSystem();
 }
 
-TextureStore::~TextureStore() {
-    if (impl_ && impl_->ts) OIIO::TextureSystem::destroy(impl_->ts, true);
-}
+TextureStore::~TextureStore() = default;
 
 TextureHandle TextureStore::load(const std::string& path, const std::string& colorspace) {
     auto& I = *impl_;
