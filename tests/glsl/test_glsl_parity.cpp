@@ -378,6 +378,23 @@ INSTANTIATE_TEST_SUITE_P(AllNodes, GlslParity, ::testing::ValuesIn(allNodeIds())
 
 namespace {
 
+// The main() of the emitted-module parity tests: 5 data texels per sample (P N T uv | wo wi) from the sampler at
+// 'binding', shading inputs without derivatives, then 'body' writes spc_out.
+std::string emittedMain(int binding, const std::string& body) {
+    return "\nlayout(binding = " + std::to_string(binding) + R"() uniform sampler2D spc_data_;
+layout(location = 0) out vec4 spc_out;
+vec4 spc_px(int i) { return texelFetch(spc_data_, ivec2(i, int(gl_FragCoord.y)), 0); }
+void main() {
+    vec4 a = spc_px(0), b = spc_px(1), c = spc_px(2), d = spc_px(3), e = spc_px(4);
+    SpeculaShadingInputs s;
+    s.position = a.xyz; s.normal = vec3(a.w, b.xy); s.tangent = vec4(b.zw, c.x, 1.0);
+    s.geometric_normal = s.normal; s.uv = c.yz;
+    s.dPdx = vec3(0.0); s.dPdy = vec3(0.0); s.duvdx = vec2(0.0); s.duvdy = vec2(0.0); s.dNdx = vec3(0.0); s.dNdy = vec3(0.0);
+    s.dwodx = vec3(0.0); s.dwody = vec3(0.0);
+    vec3 wo = d.xyz, wi = vec3(d.w, e.xy);
+    )" + body + "\n}\n";
+}
+
 // Emitted modules end to end: uniform block uploaded from GlslModule::uniforms (std140 offsets),
 // geometric bindings, specula_eval/specula_emission vs GraphMaterial::shade + Closure::eval.
 class GlslEmittedParity : public ::testing::TestWithParam<std::string> {
@@ -421,21 +438,8 @@ TEST_P(GlslEmittedParity, MaterialMatchesCpu) {
         std::copy(&data[size_t(j) * F], &data[size_t(j) * F] + 12, &packed[size_t(j) * 20]);
         std::copy(&dirs[size_t(j) * 8], &dirs[size_t(j) * 8] + 8, &packed[size_t(j) * 20 + 12]);
     }
-    std::string fs = mod.source + R"(
-layout(binding = 0) uniform sampler2D spc_data_;
-layout(location = 0) out vec4 spc_out;
-vec4 spc_px(int i) { return texelFetch(spc_data_, ivec2(i, int(gl_FragCoord.y)), 0); }
-void main() {
-    vec4 a = spc_px(0), b = spc_px(1), c = spc_px(2), d = spc_px(3), e = spc_px(4);
-    SpeculaShadingInputs s;
-    s.position = a.xyz; s.normal = vec3(a.w, b.xy); s.tangent = vec4(b.zw, c.x, 1.0);
-    s.geometric_normal = s.normal; s.uv = c.yz;
-    s.dPdx = vec3(0.0); s.dPdy = vec3(0.0); s.duvdx = vec2(0.0); s.duvdy = vec2(0.0); s.dNdx = vec3(0.0); s.dNdy = vec3(0.0);
-    s.dwodx = vec3(0.0); s.dwody = vec3(0.0);
-    vec3 wo = d.xyz, wi = vec3(d.w, e.xy);
-    spc_out = int(gl_FragCoord.x) == 0 ? vec4(specula_eval(s, wo, wi), 0.0) : vec4(specula_emission(s, wo), 0.0);
-}
-)";
+    std::string fs = mod.source + emittedMain(0, "spc_out = int(gl_FragCoord.x) == 0 ? vec4(specula_eval(s, wo, wi), 0.0) : "
+                                                  "vec4(specula_emission(s, wo), 0.0);");
     std::string log;
     unsigned prog = glsltest::glProgram(fs, &log);
     ASSERT_NE(prog, 0u) << log;
@@ -524,21 +528,8 @@ TEST(GlslManifestParity, TwoMaterialsWithResourcesInOneShader) {
     }
     ASSERT_EQ(manifests[0]["resources"].size(), 2u);  // the image and the glint dictionary
     ASSERT_EQ(manifests[1]["resources"].size(), 2u);  // the LEAN moments and the dictionary
-    shader += R"(
-layout(binding = 15) uniform sampler2D spc_data_;
-layout(location = 0) out vec4 spc_out;
-vec4 spc_px(int i) { return texelFetch(spc_data_, ivec2(i, int(gl_FragCoord.y)), 0); }
-void main() {
-    vec4 a = spc_px(0), b = spc_px(1), c = spc_px(2), d = spc_px(3), e = spc_px(4);
-    SpeculaShadingInputs s;
-    s.position = a.xyz; s.normal = vec3(a.w, b.xy); s.tangent = vec4(b.zw, c.x, 1.0);
-    s.geometric_normal = s.normal; s.uv = c.yz;
-    s.dPdx = vec3(0.0); s.dPdy = vec3(0.0); s.duvdx = vec2(0.0); s.duvdy = vec2(0.0); s.dNdx = vec3(0.0); s.dNdy = vec3(0.0);
-    s.dwodx = vec3(0.0); s.dwody = vec3(0.0);
-    vec3 wo = d.xyz, wi = vec3(d.w, e.xy);
-    spc_out = int(gl_FragCoord.x) == 0 ? vec4(specula_a_eval(s, wo, wi), 0.0) : vec4(specula_b_eval(s, wo, wi), 0.0);
-}
-)";
+    shader += emittedMain(15, "spc_out = int(gl_FragCoord.x) == 0 ? vec4(specula_a_eval(s, wo, wi), 0.0) : "
+                              "vec4(specula_b_eval(s, wo, wi), 0.0);");
     std::string log;
     unsigned prog = glsltest::glProgram(shader, &log);
     ASSERT_NE(prog, 0u) << log;
