@@ -236,19 +236,7 @@ ShadingPoint Accel::shadingPoint(const RayDifferential& ray, const Hit& hit) con
             Vec3 py = ray.ryOrigin + ty * ray.ryDirection;
             sp.dpdx = px - sp.p;
             sp.dpdy = py - sp.p;
-            // Least-squares solve of dp/dx = dp/du du/dx + dp/dv dv/dx.
-            float a00 = glm::dot(sp.dpdu, sp.dpdu), a01 = glm::dot(sp.dpdu, sp.dpdv), a11 = glm::dot(sp.dpdv, sp.dpdv);
-            float det = a00 * a11 - a01 * a01;
-            float invDet = std::abs(det) > 1e-20f ? 1.f / det : 0.f;
-            auto solve = [&](const Vec3& dp) {
-                float b0_ = glm::dot(sp.dpdu, dp), b1_ = glm::dot(sp.dpdv, dp);
-                Vec2 r((a11 * b0_ - a01 * b1_) * invDet, (a00 * b1_ - a01 * b0_) * invDet);
-                return glm::clamp(r, Vec2(-1e8f), Vec2(1e8f));
-            };
-            sp.duvdx = solve(sp.dpdx);
-            sp.duvdy = solve(sp.dpdy);
-            sp.dndx = sp.dndu * sp.duvdx.x + sp.dndv * sp.duvdx.y;
-            sp.dndy = sp.dndu * sp.duvdy.x + sp.dndv * sp.duvdy.y;
+            surfaceDifferentials(sp);
             Vec3 dn = glm::normalize(ray.d);
             sp.dwodx = -(glm::normalize(ray.rxDirection) - dn);
             sp.dwody = -(glm::normalize(ray.ryDirection) - dn);
@@ -256,6 +244,22 @@ ShadingPoint Accel::shadingPoint(const RayDifferential& ray, const Hit& hit) con
         }
     }
     return sp;
+}
+
+void surfaceDifferentials(ShadingPoint& sp) {
+    // Least-squares solve of dp/dx = dp/du du/dx + dp/dv dv/dx.
+    float a00 = glm::dot(sp.dpdu, sp.dpdu), a01 = glm::dot(sp.dpdu, sp.dpdv), a11 = glm::dot(sp.dpdv, sp.dpdv);
+    float det = a00 * a11 - a01 * a01;
+    float invDet = std::abs(det) > 1e-20f ? 1.f / det : 0.f;
+    auto solve = [&](const Vec3& dp) {
+        float b0_ = glm::dot(sp.dpdu, dp), b1_ = glm::dot(sp.dpdv, dp);
+        Vec2 r((a11 * b0_ - a01 * b1_) * invDet, (a00 * b1_ - a01 * b0_) * invDet);
+        return glm::clamp(r, Vec2(-1e8f), Vec2(1e8f));
+    };
+    sp.duvdx = solve(sp.dpdx);
+    sp.duvdy = solve(sp.dpdy);
+    sp.dndx = sp.dndu * sp.duvdx.x + sp.dndv * sp.duvdx.y;
+    sp.dndy = sp.dndu * sp.duvdy.x + sp.dndv * sp.duvdy.y;
 }
 
 Vec3 offsetRayOrigin(const Vec3& p, const Vec3& ng, const Vec3& w) {

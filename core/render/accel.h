@@ -41,5 +41,7 @@ private:
 // Offset a ray origin off a surface along the geometric normal, towards direction w (robust to
 // self-intersection without an epsilon in t; scale-aware).
 Vec3 offsetRayOrigin(const Vec3& p, const Vec3& ng, const Vec3& w);
+// duv/dx, duv/dy (least squares on dpdu, dpdv) and dn/dx, dn/dy of a shading point whose dpdx, dpdy are set.
+void surfaceDifferentials(ShadingPoint& sp);
 
 }  // namespace specula

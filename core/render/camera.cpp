@@ -55,4 +55,22 @@ RayDifferential PerspectiveCamera::generateRay(float rasterX, float rasterY, con
     return r;
 }
 
+void PerspectiveCamera::approximateDpDxy(const Vec3& p, const Vec3& n, float scale, Vec3& dpdx, Vec3& dpdy) const {
+    dpdx = dpdy = Vec3(0.f);
+    const Vec3 d = p - pos_;
+    const float z = glm::dot(d, forward_);
+    if (!(z > 1e-8f)) return;  // behind the camera: no footprint to borrow
+    const float ix = glm::dot(d, right_) / z, iy = glm::dot(d, upv_) / z;  // image-plane position at distance 1
+    const float sx = 2.f * halfW_ / float(width_), sy = 2.f * halfH_ / float(height_);  // one pixel there
+    auto along = [&](float ox, float oy) {
+        const Vec3 dir = (ix + ox) * right_ + (iy + oy) * upv_ + forward_;
+        const float den = glm::dot(n, dir);
+        if (std::abs(den) < 1e-8f) return Vec3(0.f);
+        const float t = glm::dot(n, d) / den;
+        return (pos_ + t * dir - p) * scale;
+    };
+    dpdx = along(sx, 0.f);   // raster +x: right
+    dpdy = along(0.f, -sy);  // raster +y: down
+}
+
 }  // namespace specula

@@ -24,6 +24,11 @@ public:
     // Ray through raster position (x, y) in pixels, lens sample uLens in [0,1)^2.
     RayDifferential generateRay(float rasterX, float rasterY, const Vec2& uLens) const;
 
+    // pbrt-v4's Camera::Approximate_dp_dxy: dp/dx and dp/dy of a point p with normal n as if it were seen directly
+    // from the camera (the rays through p's pixel and its neighbours, pinhole, intersected with p's tangent plane),
+    // times 'scale' (the renderer's 1/sqrt(spp) shrink). Secondary path vertices use it as their footprint.
+    void approximateDpDxy(const Vec3& p, const Vec3& n, float scale, Vec3& dpdx, Vec3& dpdy) const;
+
     const Vec3& position() const { return pos_; }
     const Vec3& forward() const { return forward_; }
     const CameraDesc& desc() const { return desc_; }

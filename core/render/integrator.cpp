@@ -16,7 +16,9 @@ Integrator::Integrator(const Scene& scene, const Accel& accel)
       accel_(accel),
       path_(scene.render.integrator == IntegratorKind::Path),
       maxDepth_(scene.render.integrator == IntegratorKind::Path ? scene.render.maxDepth : 0),
-      dimsPerBounce_(uint32_t(2 * scene.lights.size() + 4)) {}
+      dimsPerBounce_(uint32_t(2 * scene.lights.size() + 4)),
+      camera_(scene.camera, scene.render.width, scene.render.height),
+      diffScale_(std::max(0.125f, 1.f / std::sqrt(float(std::max(scene.render.spp, 1))))) {}
 
 Color3 Integrator::environment(const Vec3& dir) const {
     Color3 L(0.f);
@@ -283,7 +285,13 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
             beta.d /= (1.f - q);
             beta.s /= (1.f - q);
         }
-        sp = accel_.shadingPoint(next, h);  // secondary vertices carry no differentials
+        sp = accel_.shadingPoint(next, h);
+        // Secondary vertices: the camera's footprint at that point (pbrt-v4's approximation), so filtered lobes, glints
+        // and textures seen in mirrors or through bounces get a footprint; dwo is not differentiated there.
+        camera_.approximateDpDxy(sp.p, sp.n, diffScale_, sp.dpdx, sp.dpdy);
+        surfaceDifferentials(sp);
+        sp.dwodx = sp.dwody = Vec3(0.f);
+        sp.hasDifferentials = true;
     }
     out.beauty = emitted + out.diffuse + out.specular;
     return out;

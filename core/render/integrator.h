@@ -2,6 +2,8 @@
 // tracer with next-event estimation and MIS; both split radiance into diffuse/specular AOVs.
 #pragma once
 
+#include "core/render/camera.h"
+
 #include "core/render/accel.h"
 #include "core/render/bsdf.h"
 #include "core/render/ray.h"
@@ -42,6 +44,8 @@ private:
     bool path_;
     int maxDepth_;
     uint32_t dimsPerBounce_;
+    PerspectiveCamera camera_;  // footprints of secondary vertices (PerspectiveCamera::approximateDpDxy)
+    float diffScale_;           // the renderer's differential shrink, max(1/8, 1/sqrt(spp))
 };
 
 }  // namespace specula

@@ -12,6 +12,7 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cstring>
 
 using namespace specula;
@@ -491,4 +492,63 @@ TEST(ClosureQueries, RenamingEveryNodeGivesABitIdenticalImage) {
     const auto& img = *a.images.find("normal");
     size_t c = (size_t(12) * 32 + 16) * size_t(img.channels());
     EXPECT_NEAR(glm::length(Vec3(img.pixels[c], img.pixels[c + 1], img.pixels[c + 2])), 1.f, 5e-3f);
+}
+
+// Secondary vertices borrow the camera's footprint (pbrt-v4's Approximate_dp_dxy): for a point seen directly it
+// equals the camera ray differentials' dp/dx exactly (same pinhole geometry), and it grows linearly with distance.
+TEST(SecondaryDifferentials, CameraApproximationMatchesPrimaryRayDifferentials) {
+    Scene s = sceneFrom(diffScene(R"({"type": "quad", "size": [6, 6], "transform": {"rotate": [10, 0, 20]}, "material": "m"})"));
+    PerspectiveCamera cam(s.camera, s.render.width, s.render.height);
+    Accel accel(s);
+    int checked = 0;
+    for (int y = 4; y < s.render.height; y += 9)
+        for (int x = 3; x < s.render.width; x += 11) {
+            RayDifferential r = cam.generateRay(x + 0.5f, y + 0.5f, Vec2(0.5f));
+            Hit h;
+            if (!accel.intersect(r, h)) continue;
+            ShadingPoint sp = accel.shadingPoint(r, h);
+            ASSERT_TRUE(sp.hasDifferentials);
+            Vec3 dx, dy;
+            cam.approximateDpDxy(sp.p, sp.n, 1.f, dx, dy);
+            EXPECT_LT(glm::length(dx - sp.dpdx), 1e-3f * glm::length(sp.dpdx)) << x << "," << y;
+            EXPECT_LT(glm::length(dy - sp.dpdy), 1e-3f * glm::length(sp.dpdy)) << x << "," << y;
+            ++checked;
+        }
+    EXPECT_GT(checked, 10);
+    // Facing the camera on its axis at distance r: |dp/dx| = r * (image-plane pixel size at distance 1) * scale.
+    Vec3 f = cam.forward(), p = cam.position() + 7.f * f, dx, dy;
+    cam.approximateDpDxy(p, -f, 0.5f, dx, dy);
+    Vec3 p2 = cam.position() + 14.f * f, dx2, dy2;
+    cam.approximateDpDxy(p2, -f, 0.5f, dx2, dy2);
+    EXPECT_NEAR(glm::length(dx2) / glm::length(dx), 2.f, 1e-4f);
+    EXPECT_NEAR(glm::dot(dx, f), 0.f, 1e-6f);
+}
+
+namespace {
+// Records the footprint every shading point at depth >= 1 receives (diffuse, so the path continues).
+class FootprintProbe final : public Material {
+public:
+    mutable std::atomic<int> secondary{0}, withFootprint{0};
+    void shade(const ShadingPoint& sp, ScratchArena& arena, Closure& out, Color3* emission) const override {
+        if (sp.depth >= 1) {
+            ++secondary;
+            if (sp.hasDifferentials && glm::length(sp.duvdx) > 0.f && glm::length(sp.dpdx) > 0.f) ++withFootprint;
+        }
+        out.add(Color3(1.f), arena.make<LambertLobe>(Color3(0.8f)), sp.frame);
+    }
+};
+}  // namespace
+
+TEST(SecondaryDifferentials, PathVerticesAfterTheFirstGetAFootprint) {
+    Scene s = sceneFrom(R"({"render": {"width": 24, "height": 16, "spp": 2, "integrator": "path", "max_depth": 3},
+        "camera": {"position": [0, -3, 2], "look_at": [0, 0, 0.4], "fov": 40},
+        "materials": {"m": {"nodes": {"d": {"type": "bsdf.diffuse"}}, "output": "@d.bsdf"}},
+        "shapes": [{"type": "sphere", "radius": 0.5, "transform": {"translate": [0, 0, 0.5]}, "material": "m"},
+                   {"type": "quad", "size": [4, 4], "material": "m"}],
+        "lights": [{"type": "environment", "color": [0.5, 0.5, 0.5]}]})");
+    auto probe = std::make_shared<FootprintProbe>();
+    s.materials[0] = probe;
+    renderScene(s);
+    EXPECT_GT(probe->secondary.load(), 50);
+    EXPECT_EQ(probe->withFootprint.load(), probe->secondary.load());
 }
