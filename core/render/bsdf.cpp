@@ -33,36 +33,42 @@ void Closure::add(const Color3& weight, const BsdfLobe* lobe, const Frame& frame
     weights_[count_] = weight;
     frames_[count_] = frame;
     ++count_;
+    sel_.valid = false;
 }
 
 void Closure::scale(const Color3& s) {
     for (int i = 0; i < count_; ++i) weights_[i] *= s;
+    sel_.valid = false;
 }
 
 void Closure::append(const Closure& other, const Color3& weight) {
     for (int i = 0; i < other.count_; ++i) add(other.weights_[i] * weight, other.lobes_[i], other.frames_[i]);
 }
 
-// Selection weights from each lobe's local wo (woLocal[i]).
-void Closure::selectionWeights(const Vec3* woLocal, float* w, float& sum) const {
-    sum = 0.f;
+const Closure::Selection& Closure::selection(const Vec3& wo) const {
+    if (sel_.valid && sel_.wo == wo) return sel_;
+    sel_.wo = wo;
+    sel_.valid = true;
+    sel_.sum = 0.f;
     for (int i = 0; i < count_; ++i) {
-        w[i] = std::max(luminance(weights_[i] * lobes_[i]->albedo(woLocal[i])), 0.f);
-        sum += w[i];
+        sel_.woLocal[i] = frames_[i].toLocal(wo);
+        sel_.w[i] = std::max(luminance(weights_[i] * lobes_[i]->albedo(sel_.woLocal[i])), 0.f);
+        sel_.sum += sel_.w[i];
     }
-    if (sum <= 0.f) {  // fall back to uniform selection so no lobe becomes unreachable
-        for (int i = 0; i < count_; ++i) w[i] = 1.f;
-        sum = float(count_);
+    if (sel_.sum <= 0.f) {  // fall back to uniform selection so no lobe becomes unreachable
+        for (int i = 0; i < count_; ++i) sel_.w[i] = 1.f;
+        sel_.sum = float(count_);
     }
+    return sel_;
 }
 
 BsdfValue Closure::evalPdf(const BsdfQuery& q) const {
     BsdfValue r;
     if (count_ == 0) return r;
-    Vec3 wo[kMaxLobes];
-    for (int i = 0; i < count_; ++i) wo[i] = frames_[i].toLocal(q.wo);
-    float w[kMaxLobes], sum;
-    selectionWeights(wo, w, sum);
+    const Selection& s = selection(q.wo);
+    const Vec3* wo = s.woLocal;
+    const float* w = s.w;
+    const float sum = s.sum;
     for (int i = 0; i < count_; ++i) {
         LobeValue v = lobes_[i]->evalPdf(LobeQuery{wo[i], frames_[i].toLocal(q.wi), q.lightDistance});
         if ((q.lobes >> i) & 1) (lobes_[i]->kind() == LobeKind::Diffuse ? r.f.diffuse : r.f.specular) += weights_[i] * v.f;
@@ -73,10 +79,10 @@ BsdfValue Closure::evalPdf(const BsdfQuery& q) const {
 
 bool Closure::sample(const BsdfQuery& q, float uLobe, const Vec2& u, BsdfSample& out) const {
     if (count_ == 0) return false;
-    Vec3 wo[kMaxLobes];
-    for (int i = 0; i < count_; ++i) wo[i] = frames_[i].toLocal(q.wo);
-    float w[kMaxLobes], sum;
-    selectionWeights(wo, w, sum);
+    const Selection& s = selection(q.wo);
+    const Vec3* wo = s.woLocal;
+    const float* w = s.w;
+    const float sum = s.sum;
     float target = uLobe * sum, acc = 0.f;
     int chosen = count_ - 1;
     for (int i = 0; i < count_; ++i) {
@@ -130,15 +136,10 @@ Color3 Closure::albedo(const Vec3& wo) const {
 
 const Frame& Closure::dominantFrame(const Vec3& wo, const Frame& fallback) const {
     if (count_ == 0) return fallback;
+    const Selection& s = selection(wo);
     int best = 0;
-    float bestW = -1.f;
-    for (int i = 0; i < count_; ++i) {
-        float w = luminance(weights_[i] * lobes_[i]->albedo(frames_[i].toLocal(wo)));
-        if (w > bestW) {
-            bestW = w;
-            best = i;
-        }
-    }
+    for (int i = 1; i < count_; ++i)
+        if (s.w[i] > s.w[best]) best = i;
     return frames_[best];
 }
 

@@ -145,7 +145,10 @@ class Closure {
 public:
     static constexpr int kMaxLobes = 8;
 
-    void clear() { count_ = 0; }
+    void clear() {
+        count_ = 0;
+        sel_.valid = false;
+    }
     // Adds weight·lobe whose local frame is 'frame'; lobes beyond kMaxLobes or with zero weight are dropped.
     void add(const Color3& weight, const BsdfLobe* lobe, const Frame& frame);
     // Multiplies every lobe weight (closure.mix / scaling).
@@ -176,11 +179,21 @@ public:
     const Frame& dominantFrame(const Vec3& wo, const Frame& fallback) const;
 
 private:
-    void selectionWeights(const Vec3* woLocal, float* w, float& sum) const;
+    // wo in every lobe's frame and the lobe selection weights for wo, computed once per wo: a path vertex asks many
+    // queries (one per light, the BSDF sample) with the same wo. A closure belongs to one thread's path vertex.
+    struct Selection {
+        Vec3 wo{0.f};
+        bool valid = false;
+        Vec3 woLocal[kMaxLobes];
+        float w[kMaxLobes];
+        float sum = 0.f;
+    };
+    const Selection& selection(const Vec3& wo) const;
     std::array<const BsdfLobe*, kMaxLobes> lobes_{};
     std::array<Color3, kMaxLobes> weights_{};
     std::array<Frame, kMaxLobes> frames_{};
     int count_ = 0;
+    mutable Selection sel_;
 };
 
 }  // namespace specula

@@ -199,8 +199,13 @@ struct BsdfRequestArgs {
             } else {
                 if (!v.is_array() || v.size() < 2 || v.size() > 3)
                     throw InputError("/" + k, "'" + k + "' must be an array of 2 or 3 numbers");
+                // Full float precision: std::to_string's 6 decimals would flatten small differentials.
                 std::string t;
-                for (size_t i = 0; i < v.size(); ++i) t += (i ? "," : "") + std::to_string(v[i].get<double>());
+                char buf[32];
+                for (size_t i = 0; i < v.size(); ++i) {
+                    std::snprintf(buf, sizeof buf, "%.9g", v[i].get<double>());
+                    t += (i ? "," : "") + std::string(buf);
+                }
                 std::string* dst = k == "wo" ? &wo : k == "wi" ? &wi : k == "uv" ? &uv : k == "duvdx" ? &duvdx : k == "duvdy" ? &duvdy
                                  : k == "dpdx" ? &dpdx : k == "dpdy" ? &dpdy : k == "dndx" ? &dndx : k == "dndy" ? &dndy
                                  : k == "dwodx" ? &dwodx : &dwody;

@@ -395,6 +395,17 @@ void main() {
     )" + body + "\n}\n";
 }
 
+// The CPU shading point of one sample of the emitted-module tests (emittedMain's layout), without derivatives.
+ShadingPoint emittedShadingPoint(const float* d) {
+    ShadingPoint sp;
+    sp.p = Vec3(d[0], d[1], d[2]);
+    sp.n = sp.ng = Vec3(d[3], d[4], d[5]);
+    sp.tangent = Vec4(d[6], d[7], d[8], 1.f);
+    sp.uv = Vec2(d[9], d[10]);
+    sp.wo = Vec3(d[12], d[13], d[14]);
+    return sp;
+}
+
 // Emitted modules end to end: uniform block uploaded from GlslModule::uniforms (std140 offsets),
 // geometric bindings, specula_eval/specula_emission vs GraphMaterial::shade + Closure::eval.
 class GlslEmittedParity : public ::testing::TestWithParam<std::string> {
@@ -463,13 +474,8 @@ TEST_P(GlslEmittedParity, MaterialMatchesCpu) {
     ScratchArena arena;
     for (int j = 0; j < kSamples; ++j) {
         const float* d = &packed[size_t(j) * 20];
-        ShadingPoint sp;
-        sp.p = Vec3(d[0], d[1], d[2]);
-        sp.n = sp.ng = Vec3(d[3], d[4], d[5]);
-        sp.tangent = Vec4(d[6], d[7], d[8], 1.f);
-        sp.uv = Vec2(d[9], d[10]);
-        Vec3 wo(d[12], d[13], d[14]), wi(d[15], d[16], d[17]);
-        sp.wo = wo;
+        ShadingPoint sp = emittedShadingPoint(d);
+        const Vec3 wo = sp.wo, wi(d[15], d[16], d[17]);
         Closure cl;
         Color3 em(0.f);
         mat->shade(sp, arena, cl, &em);
@@ -592,13 +598,8 @@ TEST(GlslManifestParity, TwoMaterialsWithResourcesInOneShader) {
     ScratchArena arena;
     for (int j = 0; j < kSamples; ++j) {
         const float* d = &packed[size_t(j) * 20];
-        ShadingPoint sp;
-        sp.p = Vec3(d[0], d[1], d[2]);
-        sp.n = sp.ng = Vec3(d[3], d[4], d[5]);
-        sp.tangent = Vec4(d[6], d[7], d[8], 1.f);
-        sp.uv = Vec2(d[9], d[10]);
-        Vec3 wo(d[12], d[13], d[14]), wi(d[15], d[16], d[17]);
-        sp.wo = wo;
+        ShadingPoint sp = emittedShadingPoint(d);
+        const Vec3 wo = sp.wo, wi(d[15], d[16], d[17]);
         for (size_t m = 0; m < mats.size(); ++m) {
             Closure cl;
             mats[m]->shade(sp, arena, cl);
