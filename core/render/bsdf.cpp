@@ -120,7 +120,7 @@ LobeMask Closure::integratePolygon(const BsdfQuery& q, const Vec3* vertices, int
         if (!((q.lobes >> i) & 1)) continue;
         for (int k = 0; k < count; ++k) local[k] = frames_[i].toLocal(vertices[k]);
         Color3 r;
-        LobeQuery lq{frames_[i].toLocal(q.wo), frames_[i].toLocal(q.wo), q.lightDistance};
+        LobeQuery lq{frames_[i].toLocal(q.wo), frames_[i].toLocal(q.wo), q.lightDistance, q.polygonHorizon};
         if (!lobes_[i]->integratePolygon(lq, local, count, r)) continue;
         (lobes_[i]->kind() == LobeKind::Diffuse ? out.diffuse : out.specular) += weights_[i] * r;
         done |= LobeMask(1) << i;

@@ -45,6 +45,9 @@ struct BsdfQuery {
     // it, filtered-ggx.md §5.1); +inf for directions (directional, environment and area lights, BSDF samples).
     float lightDistance = std::numeric_limits<float>::infinity();
     LobeMask lobes = kAllLobes;  // which lobes answer (the others contribute nothing)
+    // Polygon queries (integratePolygon): how LTC lobes treat the horizon; 0 = exact clipping, 1 = clip-free sphere
+    // approximation (ltc::Horizon; render.ltc_horizon).
+    uint8_t polygonHorizon = 0;
 };
 
 // The same query in one lobe's local frame (z = the lobe's normal).
@@ -52,6 +55,7 @@ struct LobeQuery {
     Vec3 wo{0, 0, 1};
     Vec3 wi{0, 0, 1};
     float lightDistance = std::numeric_limits<float>::infinity();
+    uint8_t polygonHorizon = 0;
 };
 
 // A lobe's answer: f·|cos θi| and the solid-angle density with which sample() produces wi.
