@@ -5,7 +5,12 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <functional>
+#include <thread>
 #include <vector>
 
 using namespace specula;
@@ -95,4 +100,373 @@ TEST(LtcFit, StudentTZeroWeightsIgnoredButCounted) {
     EXPECT_NEAR(fa.invM[0][0], 5 * k, 0.02 * 5 * k);
     EXPECT_NEAR(fa.invM[1][1], 5 * k, 0.02 * 5 * k);
     EXPECT_NEAR(fa.invM[2][2], k, 0.02 * k);
+}
+
+// ---- The tables ----------------------------------------------------------------------------------------------------
+
+namespace {
+
+const char* kRegenerate =
+    "cmake --build build --target ltc-fit && build/bin/ltc-fit --out core/ltc/ltc_tables_data.cpp";
+
+// Independent double-precision GGX (isotropic), the §2 target: f·cos = D G2/(4 v_z), F = 1.
+double ggxD(double hz, double a) {
+    if (hz <= 0.0) return 0.0;
+    double a2 = a * a, e = hz * hz * (a2 - 1.0) + 1.0;
+    return a2 / (kPiD * e * e);
+}
+double ggxLambda(const DVec3& w, double a) {
+    double z2 = w.z * w.z;
+    if (z2 <= 0.0) return 1e300;
+    double t2 = (1.0 - z2) / z2;
+    return 0.5 * (-1.0 + std::sqrt(1.0 + a * a * t2));
+}
+double ggxFcos(const DVec3& v, const DVec3& l, double a) {
+    if (l.z <= 0.0 || v.z <= 0.0) return 0.0;
+    DVec3 h = glm::normalize(v + l);
+    return ggxD(h.z, a) / (1.0 + ggxLambda(v, a) + ggxLambda(l, a)) / (4.0 * v.z);
+}
+// VNDF sampler (Heitz 2018) in double and its pdf D_v(h)/(4 v·h).
+DVec3 ggxSampleVndf(const DVec3& v, double a, double u1, double u2) {
+    DVec3 vh = glm::normalize(DVec3(a * v.x, a * v.y, v.z));
+    double lensq = vh.x * vh.x + vh.y * vh.y;
+    DVec3 t1 = lensq > 0 ? DVec3(-vh.y, vh.x, 0) / std::sqrt(lensq) : DVec3(1, 0, 0);
+    DVec3 t2 = glm::cross(vh, t1);
+    double r = std::sqrt(u1), ph = 2 * kPiD * u2;
+    double p1 = r * std::cos(ph), p2 = r * std::sin(ph);
+    double s = 0.5 * (1 + vh.z);
+    p2 = (1 - s) * std::sqrt(std::max(0.0, 1 - p1 * p1)) + s * p2;
+    DVec3 nh = p1 * t1 + p2 * t2 + std::sqrt(std::max(0.0, 1 - p1 * p1 - p2 * p2)) * vh;
+    DVec3 h = glm::normalize(DVec3(a * nh.x, a * nh.y, std::max(1e-12, nh.z)));
+    return 2 * glm::dot(v, h) * h - v;
+}
+double ggxPdfVndf(const DVec3& v, const DVec3& l, double a) {
+    DVec3 h = v + l;
+    double len = glm::length(h);
+    if (len <= 0) return 0.0;
+    h /= len;
+    double vh = glm::dot(v, h);
+    if (vh <= 0 || v.z <= 0) return 0.0;
+    return ggxD(h.z, a) / (1.0 + ggxLambda(v, a)) / (4.0 * v.z);
+}
+DVec3 ltcSample(const DMat3& M, double u1, double u2) { return glm::normalize(M * cosineDir(u1, u2)); }
+
+// Fast deterministic uniform numbers (splitmix64), so the tests do not depend on a library's distributions.
+struct Rng {
+    uint64_t s;
+    explicit Rng(uint64_t seed) : s(seed) {}
+    double operator()() {
+        uint64_t z = (s += 0x9E3779B97F4A7C15ull);
+        z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+        z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+        z ^= z >> 31;
+        return (double(z >> 11) + 0.5) * (1.0 / 9007199254740992.0);
+    }
+};
+
+DVec3 viewAt(double cosTheta) { return {std::sqrt(std::max(0.0, 1 - cosTheta * cosTheta)), 0.0, cosTheta}; }
+
+// The table's LTC at a node, through the public lookup (wo in the xz plane: the lobe frame is the view frame).
+Ltc nodeLtc(const LtcTables& t, int a, int ti) {
+    return ggxIsotropic(t, float(isoAlpha(a)), Vec3(viewAt(isoCosTheta(ti))));
+}
+
+// L1/mag = ∫|f·cos − mag·D| / mag by MIS (VNDF + LTC samples, balance heuristic) (T10).
+double l1OverMag(const Ltc& ltc, double alpha, const DVec3& v, int n, uint64_t seed) {
+    DMat3 inv(ltc.invM), M = glm::inverse(inv);
+    double mag = ltc.magnitude, sum = 0.0;
+    Rng rng(seed);
+    for (int k = 0; k < n; ++k) {
+        DVec3 l1 = ggxSampleVndf(v, alpha, rng(), rng());
+        DVec3 l2 = ltcSample(M, rng(), rng());
+        for (const DVec3& l : {l1, l2}) {
+            double d = ltcDensity(inv, l), p = ggxPdfVndf(v, l, alpha);
+            if (d + p > 0) sum += std::abs(ggxFcos(v, l, alpha) - mag * d) / (d + p);
+        }
+    }
+    return sum / n / mag;
+}
+
+// ∫_P D over a polygon (lobe-frame vertices), exact: transform by invM, clip to z > 0, Lambert's edge sum (§3 steps
+// 2 and 4), two-sided. Written here so the tests need nothing from ltc.cpp.
+double polygonIntegral(const DMat3& inv, const DVec3* p, int n) {
+    DVec3 v[8], c[9];
+    for (int i = 0; i < n; ++i) v[i] = inv * p[i];
+    int m = 0;
+    for (int i = 0; i < n; ++i) {
+        const DVec3& a = v[i];
+        const DVec3& b = v[(i + 1) % n];
+        if (a.z > 0) c[m++] = a;
+        if ((a.z > 0) != (b.z > 0)) c[m++] = a + (b - a) * (a.z / (a.z - b.z));
+    }
+    if (m < 3) return 0.0;
+    double e = 0.0;
+    for (int i = 0; i < m; ++i) {
+        DVec3 a = glm::normalize(c[i]), b = glm::normalize(c[(i + 1) % m]);
+        DVec3 x = glm::cross(a, b);
+        double s = glm::length(x);
+        if (s < 1e-15) continue;
+        e += std::acos(std::clamp(glm::dot(a, b), -1.0, 1.0)) * x.z / s;
+    }
+    return std::abs(e) / (2 * kPiD);
+}
+
+// A quad (parallelogram o + s·e1 + t·e2) fully above the horizon, and an MIS Monte Carlo of ∫_quad f·cos
+// (n light-area samples plus n VNDF samples, balance heuristic) (T6's reference).
+struct Quad {
+    DVec3 o, e1, e2;
+    DVec3 vertex(int i) const { return i == 0 ? o : i == 1 ? o + e1 : i == 2 ? o + e1 + e2 : o + e2; }
+};
+Quad randomQuad(Rng& rng) {
+    for (;;) {
+        double elev = (10 + 75 * rng()) * kPiD / 180, az = 2 * kPiD * rng(), dist = 1 + 2 * rng();
+        DVec3 c = dist * DVec3(std::cos(elev) * std::cos(az), std::cos(elev) * std::sin(az), std::sin(elev));
+        DVec3 nrm = glm::normalize(-c + 0.6 * DVec3(rng() - 0.5, rng() - 0.5, rng() - 0.5));
+        DVec3 a = glm::normalize(glm::cross(nrm, DVec3(0.3, 0.5, 0.8)));
+        DVec3 b = glm::cross(nrm, a);
+        double w = 0.2 + 1.3 * rng(), h = 0.2 + 1.3 * rng();
+        Quad q{c - 0.5 * w * a - 0.5 * h * b, w * a, h * b};
+        bool ok = true;
+        for (int i = 0; i < 4; ++i) ok = ok && glm::normalize(q.vertex(i)).z > 0.02;
+        if (ok) return q;
+    }
+}
+double quadMc(const Quad& q, const DVec3& v, double alpha, int n, Rng& rng) {
+    DVec3 nrm = glm::cross(q.e1, q.e2);
+    double area = glm::length(nrm);
+    nrm /= area;
+    auto lightPdf = [&](const DVec3& p) {  // solid-angle pdf of the uniform area sample at p
+        double d2 = glm::dot(p, p);
+        double c = std::abs(glm::dot(nrm, p)) / std::sqrt(d2);
+        return c > 0 ? d2 / (area * c) : 0.0;
+    };
+    double sum = 0.0;
+    for (int k = 0; k < n; ++k) {
+        DVec3 p = q.o + rng() * q.e1 + rng() * q.e2;
+        DVec3 l = glm::normalize(p);
+        double pl = lightPdf(p), pb = ggxPdfVndf(v, l, alpha);
+        sum += ggxFcos(v, l, alpha) / (pl + pb);
+        DVec3 lb = ggxSampleVndf(v, alpha, rng(), rng());
+        double den = glm::dot(nrm, lb);
+        if (std::abs(den) > 1e-12) {
+            double tt = glm::dot(nrm, q.o) / den;
+            if (tt > 0) {
+                DVec3 hit = tt * lb - q.o;
+                // Parallelogram coordinates of the hit.
+                double e11 = glm::dot(q.e1, q.e1), e12 = glm::dot(q.e1, q.e2), e22 = glm::dot(q.e2, q.e2);
+                double h1 = glm::dot(hit, q.e1), h2 = glm::dot(hit, q.e2), det = e11 * e22 - e12 * e12;
+                double s = (h1 * e22 - h2 * e12) / det, t = (h2 * e11 - h1 * e12) / det;
+                if (s >= 0 && s <= 1 && t >= 0 && t <= 1) {
+                    double pl2 = lightPdf(tt * lb), pb2 = ggxPdfVndf(v, lb, alpha);
+                    sum += ggxFcos(v, lb, alpha) / (pl2 + pb2);
+                }
+            }
+        }
+    }
+    return sum / n;
+}
+
+// Mean |LTC·mag − MC| / mag per θ band (< 30°, 30-60°, 60-88°) over random quads, roughness and views (T6 metric),
+// for several tables at once (same quads and references).
+struct BandErrors {
+    double err[3] = {0, 0, 0};
+    int count[3] = {0, 0, 0};
+    double mean(int b) const { return err[b] / std::max(1, count[b]); }
+};
+template <class Lookup>
+std::vector<BandErrors> bandErrors(const std::vector<Lookup>& lookups, int quadsPerBand, int mcSamples) {
+    std::vector<BandErrors> out(lookups.size());
+    Rng rng(12345);
+    const double bandLo[3] = {0, 30, 60}, bandHi[3] = {30, 60, 88};
+    const double rough[3] = {0.3, 0.5, 0.8};
+    for (int b = 0; b < 3; ++b)
+        for (int k = 0; k < quadsPerBand; ++k) {
+            double r = rough[k % 3], alpha = r * r;
+            double th = (bandLo[b] + (bandHi[b] - bandLo[b]) * rng()) * kPiD / 180;
+            DVec3 v = viewAt(std::cos(th));
+            Quad q = randomQuad(rng);
+            double ref = quadMc(q, v, alpha, mcSamples, rng);
+            DVec3 p[4] = {q.vertex(0), q.vertex(1), q.vertex(2), q.vertex(3)};
+            for (size_t i = 0; i < lookups.size(); ++i) {
+                Ltc l = lookups[i](float(alpha), Vec3(v));
+                double e = std::abs(l.magnitude * polygonIntegral(DMat3(l.invM), p, 4) - ref) / l.magnitude;
+                out[i].err[b] += e;
+                out[i].count[b] += 1;
+            }
+        }
+    return out;
+}
+
+LtcTables isoOnly(const IsoTable& t) {
+    LtcTables x;
+    x.ggxInv = t.inv;
+    x.ggxMagFres = t.magFres;
+    return x;
+}
+
+}  // namespace
+
+// Golden hash: the compiled-in tables are the committed generated source, intact.
+TEST(LtcTables, GoldenHash) {
+    const LtcTables& t = builtinTables();
+    ASSERT_EQ(t.ggxInv.size(), size_t(64 * 64 * 4));
+    ASSERT_EQ(t.ggxMagFres.size(), size_t(64 * 64 * 2));
+    ASSERT_EQ(t.sphere.size(), size_t(64 * 64));
+    ASSERT_EQ(t.anisoInv.size(), size_t(t.anisoSize) * t.anisoSize * t.anisoSize * t.anisoPhiSize * 9);
+    EXPECT_EQ(t.hash(), std::string(generated::kHash))
+        << "core/ltc/ltc_tables_data.cpp was edited by hand or corrupted; regenerate it with `" << kRegenerate << "`";
+}
+
+// Drift: re-running the fit today gives exactly the committed tables (same build; libm differences across platforms
+// would show here too — then regenerate and commit on the reference platform).
+TEST(LtcTables, DriftFullRefitMatchesCommitted) {
+    int threads = int(std::max(2u, std::thread::hardware_concurrency()));
+    LtcTables t = fitAllTables(threads);
+    EXPECT_EQ(t.hash(), builtinTables().hash())
+        << "the LTC fit no longer reproduces the committed tables (fit code or its dependencies changed): regenerate "
+           "with `"
+        << kRegenerate << "` and commit core/ltc/ltc_tables_data.cpp (check: build/bin/ltc-fit --check)";
+}
+
+// T9: a sub-range of the Nelder-Mead table (rows a = 59..63, warm starts included), fitted twice with 1 thread and
+// once with 2, is bit-identical, and equal to the committed rows.
+TEST(LtcTables, T9DeterministicAcrossThreads) {
+    IsoFitOptions o;
+    o.aMin = 59;
+    o.threads = 1;
+    IsoTable a = fitGgxIsoNelderMead(o), b = fitGgxIsoNelderMead(o);
+    o.threads = 2;
+    IsoTable c = fitGgxIsoNelderMead(o);
+    EXPECT_TRUE(a.inv == b.inv && a.magFres == b.magFres);
+    EXPECT_TRUE(a.inv == c.inv && a.magFres == c.magFres);
+    const LtcTables& t = builtinTables();
+    int diff = 0;
+    for (int ti = 0; ti < 64; ++ti)
+        for (int ai = 59; ai < 64; ++ai) {
+            size_t cell = size_t(ti) * 64 + ai;
+            for (int k = 0; k < 4; ++k) diff += a.inv[cell * 4 + k] != t.ggxInv[cell * 4 + k];
+            for (int k = 0; k < 2; ++k) diff += a.magFres[cell * 2 + k] != t.ggxMagFres[cell * 2 + k];
+        }
+    EXPECT_EQ(diff, 0) << "committed rows differ from a re-fit: regenerate with `" << kRegenerate << "`";
+}
+
+// T1: the normalised LTC of every 9th cell with roughness >= 0.14 integrates to 1 within 5e-3 (MIS, 4e5 samples:
+// half from the LTC, half uniform on the sphere).
+TEST(LtcTables, T1Normalisation) {
+    const LtcTables& t = builtinTables();
+    Rng rng(7);
+    const int half = 200000;
+    double worst = 0.0;
+    int cells = 0;
+    for (int c = 0; c < 64 * 64; c += 9) {
+        int a = c % 64, ti = c / 64;
+        if (a / 63.0 < 0.14) continue;
+        Ltc l = nodeLtc(t, a, ti);
+        DMat3 inv(l.invM), M = glm::inverse(inv);
+        const double pu = 1.0 / (4 * kPiD);
+        double sum = 0.0;
+        for (int k = 0; k < half; ++k) {
+            DVec3 w1 = ltcSample(M, rng(), rng());
+            double z = 2 * rng() - 1, ph = 2 * kPiD * rng(), s = std::sqrt(std::max(0.0, 1 - z * z));
+            DVec3 w2(s * std::cos(ph), s * std::sin(ph), z);
+            for (const DVec3& w : {w1, w2}) {
+                double d = ltcDensity(inv, w);
+                sum += d / (d + pu);
+            }
+        }
+        double integral = sum / half;
+        worst = std::max(worst, std::abs(integral - 1.0));
+        EXPECT_NEAR(integral, 1.0, 5e-3) << "cell a=" << a << " t=" << ti;
+        ++cells;
+    }
+    EXPECT_GT(cells, 350);
+    std::printf("T1: %d cells, worst |∫D − 1| = %.2e\n", cells, worst);
+}
+
+// T4: mag matches a brute-force albedo (stratified uniform hemisphere, 2e6 samples) within 1e-2 at the §2 anchors, and
+// fres(t = 0) < 1e-3.
+TEST(LtcTables, T4MagnitudeAnchors) {
+    const LtcTables& t = builtinTables();
+    struct Anchor {
+        double alpha, theta, mag;
+    } anchors[] = {{0.1, 0, 0.99}, {0.5, 0, 0.688}, {1.0, 0, 0.307}, {1.0, 1.5, 0.808}};
+    for (const Anchor& an : anchors) {
+        DVec3 v = viewAt(std::cos(an.theta));
+        const int n = 1414;
+        double sum = 0.0;
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i) {
+                double z = (i + 0.5) / n, ph = 2 * kPiD * (j + 0.5) / n, s = std::sqrt(1 - z * z);
+                sum += ggxFcos(v, DVec3(s * std::cos(ph), s * std::sin(ph), z), an.alpha);
+            }
+        double brute = sum * 2 * kPiD / (double(n) * n);
+        Ltc l = ggxIsotropic(t, float(an.alpha), Vec3(v));
+        EXPECT_NEAR(brute, an.mag, 1e-2) << "brute force vs the spec anchor, alpha=" << an.alpha;
+        EXPECT_NEAR(l.magnitude, brute, 1e-2) << "table vs brute force, alpha=" << an.alpha << " theta=" << an.theta;
+        std::printf("T4: alpha %.1f theta %.1f: table %.4f brute %.4f (spec %.3f)\n", an.alpha, an.theta, l.magnitude,
+                    brute, an.mag);
+    }
+    for (int a = 0; a < 64; ++a) EXPECT_LT(t.ggxMagFres[size_t(a) * 2 + 1], 1e-3f) << "fres(t=0), a=" << a;
+}
+
+// T8: scale(z = 1, len) = 1, scale(z = −1, len > 0) = 0, monotonic in z; and Snyder's cap formula against a Monte
+// Carlo estimate of the horizon-clipped cap's form factor.
+TEST(LtcTables, T8SphereTable) {
+    const LtcTables& t = builtinTables();
+    for (int j = 0; j < 64; ++j) {
+        float len = j / 63.f;
+        EXPECT_NEAR(sphereScale(t, 1.f, len), 1.f, 1e-5f) << "len=" << len;
+        if (j > 0) EXPECT_NEAR(sphereScale(t, -1.f, len), 0.f, 1e-6f) << "len=" << len;
+        for (int i = 1; i < 64; ++i)
+            EXPECT_GE(t.sphere[size_t(j) * 64 + i], t.sphere[size_t(j) * 64 + i - 1]) << "i=" << i << " j=" << j;
+    }
+    Rng rng(3);
+    for (double omega : {0.3, 1.2, 1.6, 2.2})
+        for (double sigma : {0.2, 0.6, 1.0}) {
+            DVec3 axis(std::sin(omega), 0, std::cos(omega));
+            const int n = 200000;
+            double cs = std::cos(sigma), sum = 0.0;
+            for (int k = 0; k < n; ++k) {  // uniform on the cap, weight max(z, 0)/π · cap solid angle
+                double z = 1 - rng() * (1 - cs), ph = 2 * kPiD * rng(), s = std::sqrt(1 - z * z);
+                DVec3 x = glm::normalize(glm::cross(axis, DVec3(0, 1, 0))), y = glm::cross(axis, x);
+                DVec3 w = z * axis + s * std::cos(ph) * x + s * std::sin(ph) * y;
+                sum += std::max(w.z, 0.0);
+            }
+            double mc = sum / n * 2 * kPiD * (1 - cs) / kPiD;
+            EXPECT_NEAR(capFormFactorSnyder(omega, sigma), mc, 5e-3) << "omega=" << omega << " sigma=" << sigma;
+        }
+}
+
+// T10: L1/mag at the spec anchors within ±1.5 points.
+TEST(LtcTables, T10FitQualityAnchors) {
+    const LtcTables& t = builtinTables();
+    struct Anchor {
+        double r;
+        int ti;
+        double l1;
+    } anchors[] = {{0.25, 0, 0.01}, {0.51, 0, 0.035}, {0.51, 32, 0.125}, {0.51, 60, 0.60}, {0.51, 63, 0.73}, {1.0, 0, 0.03}};
+    for (const Anchor& an : anchors) {
+        double alpha = an.r * an.r;
+        DVec3 v = viewAt(isoCosTheta(an.ti));
+        Ltc l = ggxIsotropic(t, float(alpha), Vec3(v));
+        double e = l1OverMag(l, alpha, v, 200000, 99);
+        EXPECT_NEAR(e, an.l1, 0.015) << "roughness " << an.r << " t=" << an.ti;
+        std::printf("T10: roughness %.2f t=%d: L1/mag %.2f%% (spec %.1f%%)\n", an.r, an.ti, 100 * e, 100 * an.l1);
+    }
+}
+
+// T11: the t-EM variant of the table (§5.2) against the Nelder-Mead one: the T6 band errors within 2x of each other.
+TEST(LtcTables, T11StudentTVersusNelderMead) {
+    const LtcTables& nm = builtinTables();
+    LtcTables em = isoOnly(fitGgxIsoStudentT(16, 2));
+    using Lookup = std::function<Ltc(float, const Vec3&)>;
+    std::vector<Lookup> lookups = {[&](float a, const Vec3& v) { return ggxIsotropic(nm, a, v); },
+                                   [&](float a, const Vec3& v) { return ggxIsotropic(em, a, v); }};
+    std::vector<BandErrors> e = bandErrors(lookups, 24, 60000);
+    const char* names[3] = {"<30", "30-60", "60-88"};
+    for (int b = 0; b < 3; ++b) {
+        double x = e[0].mean(b), y = e[1].mean(b);
+        std::printf("T11: band %s deg: mean |err|/mag NM %.4f, t-EM %.4f\n", names[b], x, y);
+        EXPECT_LE(std::max(x, y), 2.0 * std::min(x, y)) << "band " << names[b];
+    }
 }
