@@ -38,7 +38,7 @@ DVec3 edgeVectorRational(const DVec3& a, const DVec3& b);
 // Sutherland-Hodgman clip of a polygon against the half-space z > 0; 'out' needs room for n + 1 vertices.
 int clipToUpperHemisphere(const DVec3* in, int n, DVec3* out);
 // Form factor of a spherical cap (half-angle σ, axis elevation ω from the normal) clipped by the horizon
-// (Snyder 1996, ltc-filtering.md §3 step 5). sigma = 0 gives max(cos ω, 0)·0.
+// (Snyder 1996, ltc-filtering.md §3 step 5); for σ -> 0 it tends to sin²σ·max(cos ω, 0).
 double capFormFactor(double omega, double sigma);
 
 // ∫_P D_o over a polygon in cosine space (vertices relative to the shading point, any length, counter-clockwise
@@ -48,6 +48,13 @@ double clampedCosineIntegral(const DVec3* v, int n, bool twoSided, Horizon horiz
 // ∫_P D over a polygon given in the LTC's lobe frame (transforms by invM, then clampedCosineIntegral).
 double integrate(const Ltc& ltc, const Vec3* vertices, int n, bool twoSided, Horizon horizon,
                  const LtcTables* tables);
+
+// Draws w ∝ D restricted to the polygon (vertices in the LTC's lobe frame, relative to the shading point, oriented as
+// for clampedCosineIntegral): Malley's method in cosine space, i.e. a uniform point of the clipped polygon's
+// projection onto the unit disk, by rejection from its exact bounding box. u is the first try; further tries hash
+// 'seed'. The density (solid angle, lobe frame) is D(w)/∫_P D. False when the polygon is invisible or no try hit.
+// This is the sampling the ratio estimator of Heitz, Hill & McGuire 2018 needs for an unbiased shadow ratio.
+bool samplePolygon(const Ltc& ltc, const Vec3* vertices, int n, const Vec2& u, uint64_t seed, Vec3& w);
 
 // A lobe made of one LTC: f·cos = tint·magnitude·D(wi) on the upper hemisphere, pdf = D(wi) (its own sampling;
 // samples below the horizon are rejected, so the pdf is a sub-density), and the exact polygon integral.
@@ -63,6 +70,8 @@ public:
     const char* modelName() const override { return "ltc"; }
     void parameters(const LobeQuery& q, LobeParameters& out) const override;
     bool integratePolygon(const LobeQuery& q, const Vec3* vertices, int count, Color3& result) const override;
+    bool samplePolygon(const LobeQuery& q, const Vec3* vertices, int count, const Vec2& u, uint64_t seed,
+                       Vec3& wi) const override;
     const Ltc& ltc() const { return ltc_; }
 
 private:

@@ -112,7 +112,8 @@ bool Closure::sample(const BsdfQuery& q, float uLobe, const Vec2& u, BsdfSample&
     return true;
 }
 
-LobeMask Closure::integratePolygon(const BsdfQuery& q, const Vec3* vertices, int count, BsdfEval& out) const {
+LobeMask Closure::integratePolygon(const BsdfQuery& q, const Vec3* vertices, int count, BsdfEval& out,
+                                   Color3* perLobe) const {
     LobeMask done = 0;
     Vec3 local[8];
     if (count > 8) return 0;
@@ -123,9 +124,22 @@ LobeMask Closure::integratePolygon(const BsdfQuery& q, const Vec3* vertices, int
         LobeQuery lq{frames_[i].toLocal(q.wo), frames_[i].toLocal(q.wo), q.lightDistance, q.polygonHorizon};
         if (!lobes_[i]->integratePolygon(lq, local, count, r)) continue;
         (lobes_[i]->kind() == LobeKind::Diffuse ? out.diffuse : out.specular) += weights_[i] * r;
+        if (perLobe) perLobe[i] = weights_[i] * r;
         done |= LobeMask(1) << i;
     }
     return done;
+}
+
+bool Closure::samplePolygon(const BsdfQuery& q, int i, const Vec3* vertices, int count, const Vec2& u, uint64_t seed,
+                            Vec3& wi) const {
+    if (i < 0 || i >= count_ || count > 8) return false;
+    Vec3 local[8];
+    for (int k = 0; k < count; ++k) local[k] = frames_[i].toLocal(vertices[k]);
+    LobeQuery lq{frames_[i].toLocal(q.wo), frames_[i].toLocal(q.wo), q.lightDistance, q.polygonHorizon};
+    Vec3 w;
+    if (!lobes_[i]->samplePolygon(lq, local, count, u, seed, w)) return false;
+    wi = frames_[i].toWorld(w);
+    return true;
 }
 
 Color3 Closure::albedo(const Vec3& wo) const {

@@ -102,6 +102,13 @@ public:
     virtual bool integratePolygon(const LobeQuery& q, const Vec3* vertices, int count, Color3& result) const {
         return false;
     }
+    // For lobes with integratePolygon: a direction wi distributed in proportion to the integrand integratePolygon
+    // integrates, restricted to the polygon (u: the first random pair; seed: for further tries). The shadow ratio
+    // of Heitz, Hill & McGuire 2018 then needs one visibility test: E[integral·V(wi)] = the shadowed integral.
+    virtual bool samplePolygon(const LobeQuery& q, const Vec3* vertices, int count, const Vec2& u, uint64_t seed,
+                               Vec3& wi) const {
+        return false;
+    }
 
     // Conveniences for tests and tools: a directional query (no light distance).
     Color3 eval(const Vec3& wo, const Vec3& wi) const { return evalPdf(LobeQuery{wo, wi}).f; }
@@ -176,7 +183,12 @@ public:
     // Σ weight · lobe.integratePolygon over the lobes in q.lobes that have a closed form, split by category,
     // added to 'out'. The vertices are world-space offsets from the shading point. Returns the mask of the lobes
     // integrated analytically; the caller estimates the others (e.g. sampled next-event estimation with MIS).
-    LobeMask integratePolygon(const BsdfQuery& q, const Vec3* vertices, int count, BsdfEval& out) const;
+    // perLobe (optional, kMaxLobes entries): each integrated lobe's weighted integral, for the shadow ratio.
+    LobeMask integratePolygon(const BsdfQuery& q, const Vec3* vertices, int count, BsdfEval& out,
+                              Color3* perLobe = nullptr) const;
+    // Lobe i's BsdfLobe::samplePolygon in world space (vertices: world offsets from the shading point).
+    bool samplePolygon(const BsdfQuery& q, int i, const Vec3* vertices, int count, const Vec2& u, uint64_t seed,
+                       Vec3& wi) const;
     // The frame of the lobe that scatters most towards wo (largest selection weight; the first on ties), or
     // 'fallback' for an empty closure: the normal AOV and the quad-derivative partner frames. It depends on the
     // closure's structure only, never on node ids.

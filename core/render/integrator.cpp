@@ -3,6 +3,7 @@
 // diffuse and specular AOVs add up exactly to the reflected part of beauty.
 #include "core/render/integrator.h"
 
+#include "core/render/sampler.h"
 #include "core/render/sampling.h"
 #include "core/scene/scene.h"
 
@@ -18,7 +19,8 @@ Integrator::Integrator(const Scene& scene, const Accel& accel)
       maxDepth_(scene.render.integrator == IntegratorKind::Path ? scene.render.maxDepth : 0),
       dimsPerBounce_(uint32_t(2 * scene.lights.size() + 4)),
       camera_(scene.camera, scene.render.width, scene.render.height),
-      diffScale_(std::max(0.125f, 1.f / std::sqrt(float(std::max(scene.render.spp, 1))))) {}
+      diffScale_(std::max(0.125f, 1.f / std::sqrt(float(std::max(scene.render.spp, 1))))),
+      ltcLights_(scene.render.areaLights == AreaLightMode::Ltc) {}
 
 Color3 Integrator::environment(const Vec3& dir) const {
     Color3 L(0.f);
@@ -162,9 +164,9 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
         }
         if (closure.empty()) break;
 
-        // Next-event estimation: one sample of every light. For polygonal lights, the lobes with a closed-form
-        // polygon integral (BsdfLobe::integratePolygon, e.g. LTC lobes) are integrated analytically, times the
-        // visibility of one sampled point; the other lobes are estimated from the same light sample with MIS, and
+        // Next-event estimation: one sample of every light. For polygonal lights (render.area_lights = "ltc"), the
+        // lobes with a closed-form polygon integral (BsdfLobe::integratePolygon, e.g. LTC lobes) are integrated
+        // analytically with stochastic shadows; the other lobes are estimated from a light sample with MIS, and
         // BSDF sampling later counts only those for this light.
         std::array<LobeMask, kMaxAnalyticLights> analytic{};
         for (size_t li = 0; li < scene_.lights.size(); ++li) {
@@ -173,26 +175,54 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
             Vec2 u = sampler.get2D();
             BsdfQuery q;
             q.wo = wo;
-            if (li < kMaxAnalyticLights) {
+            q.polygonHorizon = scene_.render.ltcHorizon;
+            if (ltcLights_ && li < kMaxAnalyticLights) {
                 Vec3 poly[4];
                 Color3 Lp;
                 int n = light.polygon(sp.pGeom, poly, Lp);
                 BsdfEval fa;
+                std::array<Color3, Closure::kMaxLobes> perLobe{};
                 if (n > 0) {
                     for (int k = 0; k < n; ++k) poly[k] = poly[k] - sp.pGeom;
-                    analytic[li] = closure.integratePolygon(q, poly, n, fa);
-                    if (analytic[li] != 0) {
-                        if (!light.sample(sp.pGeom, u, ls) || glm::dot(ls.wi, sp.ng) <= 0.f) continue;
-                        if (accel_.occluded(shadowRay(sp, ls))) continue;
-                        addLightSample(out, beta, depth, fa, Lp, clamp);
-                        q.lobes = ~analytic[li];
-                        if ((q.lobes & closure.allLobes()) == 0 || !(ls.pdf > 0.f) || maxComponent(ls.L) <= 0.f) continue;
-                        q.wi = ls.wi;  // the remaining lobes: sampled, visibility known (area lights are not delta)
-                        BsdfValue v = closure.evalPdf(q);
-                        if (maxComponent(v.f.total()) <= 0.f) continue;
-                        addLightSample(out, beta, depth, v.f, ls.L * (powerHeuristic(ls.pdf, v.pdf) / ls.pdf), clamp);
-                        continue;
+                    analytic[li] = closure.integratePolygon(q, poly, n, fa, perLobe.data());
+                }
+                if (analytic[li] != 0) {
+                    // Shadows by the ratio estimator of Heitz, Hill & McGuire 2018: the unshadowed integral U_j of
+                    // each analytic lobe times the shadowed/unshadowed ratio of one sample. The sample is drawn
+                    // ∝ that lobe's own integrand over the light (samplePolygon), so the ratio is its visibility
+                    // and E[U_j·V] is exactly the shadowed integral: fully lit or fully shadowed pixels are noise-free.
+                    const Vec3 lightNormal = glm::cross(poly[1] - poly[0], poly[2] - poly[0]);
+                    int rank = 0;
+                    for (int j = 0; j < closure.size(); ++j) {
+                        if (!((analytic[li] >> j) & 1) || maxComponent(perLobe[j]) <= 0.f) continue;
+                        const uint64_t key = (uint64_t(depth) << 40) ^ (uint64_t(li) << 8) ^ uint64_t(j);
+                        Vec2 uj = rank++ == 0 ? u
+                                              : Vec2(PixelSampler::unitFloat(sampler.bits(key * 2)),
+                                                     PixelSampler::unitFloat(sampler.bits(key * 2 + 1)));
+                        Vec3 wj;
+                        if (!closure.samplePolygon(q, j, poly, n, uj, sampler.bits(~key), wj)) continue;
+                        if (glm::dot(wj, sp.ng) <= 0.f) continue;  // below the geometric surface, as sampled NEE
+                        float den = glm::dot(wj, lightNormal);
+                        if (den == 0.f) continue;
+                        LightSample lj;
+                        lj.wi = wj;
+                        lj.distance = glm::dot(poly[0], lightNormal) / den;
+                        if (!(lj.distance > 0.f) || accel_.occluded(shadowRay(sp, lj))) continue;
+                        BsdfEval fj;
+                        (closure.lobe(j)->kind() == LobeKind::Diffuse ? fj.diffuse : fj.specular) = perLobe[j];
+                        addLightSample(out, beta, depth, fj, Lp, clamp);
                     }
+                    // The lobes without a closed form: sampled next-event estimation with MIS, as for other lights.
+                    q.lobes = ~analytic[li];
+                    if ((q.lobes & closure.allLobes()) == 0) continue;
+                    if (!light.sample(sp.pGeom, u, ls) || !(ls.pdf > 0.f) || maxComponent(ls.L) <= 0.f) continue;
+                    if (glm::dot(ls.wi, sp.ng) <= 0.f) continue;
+                    q.wi = ls.wi;
+                    BsdfValue v = closure.evalPdf(q);
+                    if (maxComponent(v.f.total()) <= 0.f) continue;
+                    if (accel_.occluded(shadowRay(sp, ls))) continue;
+                    addLightSample(out, beta, depth, v.f, ls.L * (powerHeuristic(ls.pdf, v.pdf) / ls.pdf), clamp);
+                    continue;
                 }
             }
             if (!light.sample(sp.pGeom, u, ls) || !(ls.pdf > 0.f) || maxComponent(ls.L) <= 0.f) continue;

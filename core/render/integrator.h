@@ -46,6 +46,7 @@ private:
     uint32_t dimsPerBounce_;
     PerspectiveCamera camera_;  // footprints of secondary vertices (PerspectiveCamera::approximateDpDxy)
     float diffScale_;           // the renderer's differential shrink, max(1/8, 1/sqrt(spp))
+    bool ltcLights_;            // render.area_lights == "ltc": polygon lights integrated by the lobes that can
 };
 
 }  // namespace specula

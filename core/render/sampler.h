@@ -28,6 +28,10 @@ public:
         return {a, get1D()};
     }
     uint32_t dimension() const { return dim_; }
+    // Random bits for a decision outside the fixed dimension order (keyed, consumes no dimension): the extra
+    // samples of LTC shadow rays, rejection-sampling retries.
+    uint64_t bits(uint64_t key) const { return mix64(base_ ^ mix64(key + 0x632BE59BD9B4E019ULL)); }
+    static float unitFloat(uint64_t h) { return toFloat(h); }
     // Jump to a fixed dimension block (e.g. the start of bounce k), keeping bounce sequences aligned.
     void setDimension(uint32_t d) { dim_ = d; }
 

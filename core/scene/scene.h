@@ -28,6 +28,8 @@ struct CropWindow {
     int x0 = 0, y0 = 0, x1 = 0, y1 = 0;  // pixel bounds, [x0,x1) x [y0,y1)
 };
 
+enum class AreaLightMode : uint8_t { Sampled, Ltc };
+
 struct RenderSettings {
     int width = 640, height = 480;
     int spp = 16;
@@ -40,6 +42,10 @@ struct RenderSettings {
     bool pixelCenter = false;  // spp = 1 samples the pixel centre (validation.md §1)
     DerivativeMode derivatives = DerivativeMode::Ray;  // "derivatives": "ray" | "quad"
     float clampIndirect = 0.f; // max component of one indirect contribution (Cycles' clamp_indirect); 0 = off
+    // "area_lights": quad lights integrated analytically by the lobes that can (LTC, with the shadow ratio of Heitz,
+    // Hill & McGuire 2018) or sampled only; "ltc_horizon": exact clipping or the clip-free sphere approximation.
+    AreaLightMode areaLights = AreaLightMode::Ltc;
+    uint8_t ltcHorizon = 0;    // ltc::Horizon: 0 clip, 1 clipless
     std::optional<CropWindow> crop;
 };
 

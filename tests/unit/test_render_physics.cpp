@@ -409,6 +409,7 @@ TEST(PolygonLightHook, AnalyticIntegrationMatchesSampledQuadLight) {
         "shapes": [{"type": "quad", "size": [6, 6], "material": "m"}],
         "lights": [{"type": "quad", "position": [0.3, 0.2, 1.2], "look_at": [0.3, 0.2, 0], "size": [1.0, 0.6], "power": 40}]})";
     Scene sampled = sceneFrom(json);
+    sampled.render.areaLights = AreaLightMode::Sampled;  // bsdf.diffuse has a closed form too: sample it here
     Scene analytic = sceneFrom(json);
     analytic.materials[0] = std::make_shared<AnalyticLambertMaterial>();
     RenderOutput a = renderScene(sampled), b = renderScene(analytic);
@@ -449,6 +450,7 @@ TEST(PolygonLightHook, PartlyAnalyticClosureMatchesSampledQuadLight) {
         "shapes": [{"type": "quad", "size": [6, 6], "material": "m"}],
         "lights": [{"type": "quad", "position": [0.3, 0.9, 1.2], "look_at": [0.3, 0.2, 0], "size": [1.0, 0.6], "power": 40}]})";
     Scene sampled = sceneFrom(json);
+    sampled.render.areaLights = AreaLightMode::Sampled;
     Scene mixed = sceneFrom(json);
     sampled.materials[0] = std::make_shared<LambertPlusGgxMaterial>();
     mixed.materials[0] = std::make_shared<AnalyticLambertPlusGgxMaterial>();

@@ -1,6 +1,7 @@
 // Lambertian reflection lobe: f = albedo/π, cosine-weighted hemisphere sampling.
 #pragma once
 
+#include "core/ltc/ltc.h"
 #include "core/render/bsdf.h"
 #include "core/render/sampling.h"
 
@@ -22,6 +23,17 @@ public:
         return wi.z > 0.f;
     }
     Color3 albedo(const Vec3&) const override { return albedo_; }
+    // The cosine lobe is the LTC with M = I: its polygon integral is Lambert's form factor, exact (HDHN16 §4).
+    bool integratePolygon(const LobeQuery& q, const Vec3* vertices, int count, Color3& result) const override {
+        result = q.wo.z > 0.f
+                     ? albedo_ * float(ltc::integrate(ltc::Ltc{}, vertices, count, false, ltc::Horizon(q.polygonHorizon), nullptr))
+                     : Color3(0.f);
+        return true;
+    }
+    bool samplePolygon(const LobeQuery& q, const Vec3* vertices, int count, const Vec2& u, uint64_t seed,
+                       Vec3& wi) const override {
+        return q.wo.z > 0.f && ltc::samplePolygon(ltc::Ltc{}, vertices, count, u, seed, wi);
+    }
     const char* modelName() const override { return "lambert"; }
     void parameters(const LobeQuery&, LobeParameters& out) const override {
         out.push_back({"albedo", {albedo_.x, albedo_.y, albedo_.z}});
