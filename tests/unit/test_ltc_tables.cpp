@@ -194,7 +194,7 @@ double l1OverMag(const Ltc& ltc, double alpha, const DVec3& v, int n, uint64_t s
 }
 
 // ∫_P D over a polygon (lobe-frame vertices), exact: transform by invM, clip to z > 0, Lambert's edge sum (§3 steps
-// 2 and 4), two-sided. Written here so the tests need nothing from ltc.cpp.
+// 2 and 4), two-sided. An independent cross-check of ltc::integrate.
 double polygonIntegral(const DMat3& inv, const DVec3* p, int n) {
     DVec3 v[8], c[9];
     for (int i = 0; i < n; ++i) v[i] = inv * p[i];
@@ -306,9 +306,13 @@ std::vector<BandErrors> bandErrors(const std::vector<Lookup>& lookups, int quads
             Quad q = randomQuad(rng);
             double ref = quadMc(q, v, g, mcSamples, rng);
             DVec3 p[4] = {q.vertex(0), q.vertex(1), q.vertex(2), q.vertex(3)};
+            Vec3 pf[4] = {Vec3(p[0]), Vec3(p[1]), Vec3(p[2]), Vec3(p[3])};
             for (size_t i = 0; i < lookups.size(); ++i) {
                 Ltc l = lookups[i](float(g.ax), float(g.ay), Vec3(v));
-                double est = l.magnitude * polygonIntegral(DMat3(l.invM), p, 4);
+                // The integrator's exact path (ltc.cpp), cross-checked against this file's own edge sum.
+                double pi = integrate(l, pf, 4, true, Horizon::Clip, nullptr);
+                EXPECT_NEAR(pi, polygonIntegral(DMat3(l.invM), p, 4), 1e-4 + 1e-3 * pi);
+                double est = l.magnitude * pi;
                 out[i].abs[b].push_back(std::abs(est - ref) / l.magnitude);
                 out[i].est[b].push_back(est / l.magnitude);
                 if (ref >= 0.1 * l.magnitude) out[i].rel[b].push_back(std::abs(est - ref) / ref);
@@ -455,6 +459,7 @@ TEST(LtcTables, T8SphereTable) {
             }
             double mc = sum / n * 2 * kPiD * (1 - cs) / kPiD;
             EXPECT_NEAR(capFormFactorSnyder(omega, sigma), mc, 5e-3) << "omega=" << omega << " sigma=" << sigma;
+            EXPECT_NEAR(capFormFactorSnyder(omega, sigma), capFormFactor(omega, sigma), 1e-12);  // ltc.cpp's copy
         }
 }
 
