@@ -556,3 +556,37 @@ TEST(LtcTables, DISABLED_AnisotropicGridStudy) {
                     f[0].mean(0), f[0].mean(1), f[0].mean(2));
     }
 }
+
+// ggxIsotropic folds the view-frame rotation into invM: the lobe for a view at azimuth φ is the φ = 0 lobe rotated
+// by φ about the normal; at a node the GL-style bilinear returns the node's entries; wo along the normal uses T1 = x.
+TEST(LtcTables, IsotropicLookupFrameAndNodes) {
+    const LtcTables& t = builtinTables();
+    const float alpha = 0.3f;
+    Vec3 wo0 = glm::normalize(Vec3(0.7f, 0.f, 0.5f));
+    Ltc l0 = ggxIsotropic(t, alpha, wo0);
+    for (float ph : {0.4f, 1.9f, -2.5f}) {
+        float c = std::cos(ph), s = std::sin(ph);
+        auto rot = [&](const Vec3& w) { return Vec3(c * w.x - s * w.y, s * w.x + c * w.y, w.z); };
+        Ltc l = ggxIsotropic(t, alpha, rot(wo0));
+        EXPECT_FLOAT_EQ(l.magnitude, l0.magnitude);
+        for (Vec3 w : {Vec3(-0.5f, 0.1f, 0.8f), Vec3(0.2f, -0.4f, 0.6f), Vec3(-0.9f, 0.05f, 0.3f)}) {
+            w = glm::normalize(w);
+            double a = ltcDensity(DMat3(l0.invM), DVec3(w)), b = ltcDensity(DMat3(l.invM), DVec3(rot(w)));
+            EXPECT_NEAR(a, b, 1e-4 * std::max(1.0, a)) << "phi=" << ph;
+        }
+    }
+    // (Not t = 63: that node is fitted at θ = 1.57 but sits at coordinate √(1 − 0) = 1, as in ltc_code, so a view at
+    // exactly θ = 1.57 reads 2.5% of the way from t = 62.)
+    for (int a : {5, 32, 63})
+        for (int ti : {0, 20, 62}) {
+            Ltc l = nodeLtc(t, a, ti);
+            const float* e = &t.ggxInv[(size_t(ti) * 64 + a) * 4];
+            EXPECT_NEAR(l.invM[0][0], e[0], 1e-4f * (1 + std::abs(e[0])));
+            EXPECT_NEAR(l.invM[0][2], e[1], 1e-4f * (1 + std::abs(e[1])));
+            EXPECT_NEAR(l.invM[2][0], e[2], 1e-4f * (1 + std::abs(e[2])));
+            EXPECT_NEAR(l.invM[2][2], e[3], 1e-4f * (1 + std::abs(e[3])));
+            EXPECT_NEAR(l.magnitude, t.ggxMagFres[(size_t(ti) * 64 + a) * 2], 1e-4f);
+        }
+    Ltc n = ggxIsotropic(t, alpha, Vec3(0, 0, 1));
+    EXPECT_TRUE(std::isfinite(n.invM[0][0]) && n.invM[1][1] == 1.f);
+}
