@@ -112,8 +112,14 @@ public:
                        Vec3& wi) const override {
         return q.wo.z > 0.f && ltc::samplePolygon(polygonLtc(q.wo), vertices, count, u, seed, wi);
     }
+    // The LTC for wo, cached: a path vertex asks the integral and the shadow sample of every light with one wo.
     ltc::Ltc polygonLtc(const Vec3& wo) const {
-        return ltc::ggxRoughnessMatrix(ltc::builtinTables(), double(ax_) * ax_, 0.0, double(ay_) * ay_, wo);
+        if (!(ltcValid_ && wo == ltcWo_)) {
+            ltc_ = ltc::ggxRoughnessMatrix(ltc::builtinTables(), double(ax_) * ax_, 0.0, double(ay_) * ay_, wo);
+            ltcWo_ = wo;
+            ltcValid_ = true;
+        }
+        return ltc_;
     }
 
     float alphaX() const { return ax_; }
@@ -123,6 +129,9 @@ private:
     float ax_, ay_;
     Fresnel fresnel_;
     Color3 tint_;
+    mutable ltc::Ltc ltc_;  // lobes belong to one thread's shading point (ScratchArena)
+    mutable Vec3 ltcWo_{0.f};
+    mutable bool ltcValid_ = false;
 };
 
 }  // namespace specula

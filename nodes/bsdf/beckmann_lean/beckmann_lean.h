@@ -176,7 +176,10 @@ public:
                        Vec3& wi) const override {
         return q.wo.z > 0.f && ltc::samplePolygon(polygonLtc(q.wo), vertices, count, u, seed, wi);
     }
-    ltc::Ltc polygonLtc(const Vec3& wo) const {
+    ltc::Ltc polygonLtc(const Vec3& wo) const {  // cached per wo, as GgxLobe::polygonLtc
+        if (ltcValid_ && wo == ltcWo_) return ltc_;
+        ltcWo_ = wo;
+        ltcValid_ = true;
         const Vec3 n = glm::normalize(Vec3(-g_.mean.x, -g_.mean.y, 1.f));
         const Vec3 t = glm::normalize(Vec3(1.f, 0.f, 0.f) - n * n.x);
         const Mat3 tilt = glm::transpose(Mat3(t, glm::cross(n, t), n));  // rows t, b, n: lobe frame -> tilted frame
@@ -186,13 +189,16 @@ public:
         ltc::Ltc l = ltc::ggxRoughnessMatrix(ltc::builtinTables(), kEquivalentScale * g_.a, kEquivalentScale * g_.c,
                                              kEquivalentScale * g_.b, tilt * wo);
         l.invM = l.invM * tilt;
-        return l;
+        return ltc_ = l;
     }
     const lean::SlopeGaussian& gaussian() const { return g_; }
 
 private:
     lean::SlopeGaussian g_;
     Fresnel fresnel_;
+    mutable ltc::Ltc ltc_;
+    mutable Vec3 ltcWo_{0.f};
+    mutable bool ltcValid_ = false;
 };
 
 }  // namespace specula

@@ -396,8 +396,13 @@ public:
                        Vec3& wi) const override {
         return q.wo.z > 0.f && ltc::samplePolygon(polygonLtc(q.wo), vertices, count, u, seed, wi);
     }
-    ltc::Ltc polygonLtc(const Vec3& wo) const {
-        return ltc::ggxRoughnessMatrix(ltc::builtinTables(), sampling_.a, sampling_.c, sampling_.d, wo);
+    ltc::Ltc polygonLtc(const Vec3& wo) const {  // cached per wo, as GgxLobe::polygonLtc
+        if (!(ltcValid_ && wo == ltcWo_)) {
+            ltc_ = ltc::ggxRoughnessMatrix(ltc::builtinTables(), sampling_.a, sampling_.c, sampling_.d, wo);
+            ltcWo_ = wo;
+            ltcValid_ = true;
+        }
+        return ltc_;
     }
 
     const Sym2& unfiltered() const { return s_.A; }
@@ -409,6 +414,7 @@ public:
         D3 wi(-wo.x, -wo.y, wo.z);
         sampling_ = filtered(wo, wi, 0.0, false);
         samplingL_ = cholesky(sampling_);
+        ltcValid_ = false;
     }
 
 private:
@@ -422,6 +428,9 @@ private:
     bool halfVector_ = false;
     Sym2 fixed_, sampling_;
     Chol2 samplingL_;
+    mutable ltc::Ltc ltc_;
+    mutable Vec3 ltcWo_{0.f};
+    mutable bool ltcValid_ = false;
 };
 
 }  // namespace specula::fggx
