@@ -364,6 +364,7 @@ Scene loadSceneFromString(const std::string& text, const std::string& baseDir, c
     ctx.scene = &scene;
     if (top.has("render")) readRender(root.at("render"), scene);
     if (ov.spp > 0) scene.render.spp = ov.spp;
+    if (ov.areaLights) scene.render.areaLights = *ov.areaLights;
     if (ov.width > 0) scene.render.width = ov.width;
     if (ov.height > 0) scene.render.height = ov.height;
     if (ov.seed >= 0) scene.render.seed = uint64_t(ov.seed);

@@ -15,6 +15,7 @@ struct SceneOverrides {
     int width = 0, height = 0; // 0 = keep
     int64_t seed = -1;         // <0 = keep
     std::optional<CropWindow> crop;
+    std::optional<AreaLightMode> areaLights;  // render.area_lights
 };
 
 // Parses and builds a scene from a file. Relative paths in the scene resolve against its folder.

@@ -86,6 +86,9 @@ int main(int argc, char** argv) {
     render->add_option("--seed", seed, "Sampler seed (overrides the scene)")->check(CLI::Range(int64_t(0), int64_t(2147483647)));
     render->add_option("--resolution", resolution, "Image size WxH (overrides the scene)");
     render->add_option("--crop", crop, "Render only pixels x0,y0,x1,y1 (x1,y1 exclusive); output is the crop");
+    std::string areaLights;
+    render->add_option("--area-lights", areaLights, "Quad lights: ltc (analytic where lobes can) or sampled (overrides render.area_lights)")
+        ->check(CLI::IsMember({"ltc", "sampled"}));
     render->add_option("--progress", progress, "Progress output: bar (stderr), json (stdout lines) or none")
         ->check(CLI::IsMember({"bar", "json", "none"}));
     CameraShiftOptions shiftOpts;
@@ -94,6 +97,7 @@ int main(int argc, char** argv) {
         SceneOverrides ov;
         ov.spp = spp;
         ov.seed = seed;
+        if (!areaLights.empty()) ov.areaLights = areaLights == "ltc" ? AreaLightMode::Ltc : AreaLightMode::Sampled;
         if (!resolution.empty() && !parsePair(resolution, 'x', ov.width, ov.height)) {
             std::fprintf(stderr, "specula: error: --resolution expects WxH, got '%s'\n", resolution.c_str());
             exitCode = kExitUsage;
