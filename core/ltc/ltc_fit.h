@@ -14,9 +14,12 @@ struct WeightedDirection {
     float weight;
 };
 
-// [OWNED BY THE TABLE HELPER] Student-t (ν = 2) maximum-likelihood fit of an LTC to weighted directions
-// (ltc-filtering.md §5.2 steps 1-4). 'tangentHint' fixes X by Gram-Schmidt so neighbouring fits are consistent.
-// Returns the LTC (invM normalised as documented in the implementation) with magnitude = mean sample weight.
+// Student-t (ν = 2) maximum-likelihood fit of an LTC to weighted directions (ltc-filtering.md §5.2 steps 1-4, no
+// axis refinement): Z = normalised weighted mean, X = Gram-Schmidt of 'tangentHint' (so neighbouring fits share a
+// frame), gnomonic projection (samples with w·Z <= 1e-4 dropped), Liu-Rubin EM (ν = 2, 'iterations' steps from μ = 0,
+// S = ½·median(|p|²)·I, eigenvalues of S clamped to >= 1e-14), A = lower Cholesky of 2S, M = [X Y Z]·K.
+// Returns invM = inverse(M) scaled to determinant 1, magnitude = mean weight over ALL samples (dropped ones and
+// weight-0 ones included), fresnel = 0. Computed in double internally. Deterministic (no RNG).
 Ltc fitStudentT(const std::vector<WeightedDirection>& samples, const Vec3& tangentHint, int iterations = 30);
 
 }  // namespace specula::ltc
