@@ -218,6 +218,9 @@ uint64_t NormalMapLtcPrefilter::contentHash(const std::vector<Vec3>& normals, in
     f.value(int32_t(size));
     f.value(s.alpha);
     for (int v : {s.specTheta, s.specPhi, s.diffTheta, s.diffPhi, s.maxSamples, s.iterations}) f.value(int32_t(v));
+    // The magnitudes come from the base table (fitAll), so its version is part of the content.
+    const std::string th = builtinTables().hash();
+    f.add(th.data(), th.size());
     for (const Vec3& n : normals) {
         Vec3 c = clampNormal(n);
         f.add(&c, sizeof c);
@@ -253,6 +256,59 @@ void NormalMapLtcPrefilter::fitAll() {
     std::vector<Mat3> rot(normals_.size());
     for (size_t i = 0; i < normals_.size(); ++i) rot[i] = texelRotation(normals_[i]);
     const float alpha = std::max(s.alpha, 1e-3f);
+    const LtcTables& tables = builtinTables();
+
+    // Magnitude and Fresnel moment of every stored (texel, view), exactly: the mean over the footprint's level-0 texels
+    // of the base table's values for each texel (0 where it faces away), i.e. the albedo of the thesis's ground truth
+    // (eq. 3.5 with the base LTC per texel) and of the level-0 lookup, so the 0-1 level blend has no jump. The mean
+    // G2/G1 weight of 256 stratified VNDF samples is biased by up to ~1% at α ≈ 0.1 (the weight drops steeply near
+    // the VNDF disk's rim, which a 16×16 midpoint grid under-samples), above T12's 5e-3. Per view: level-0 values, then
+    // exact 2×2 box means level by level (double).
+    const int nSpecV = s.specTheta * s.specPhi, nDiffV = s.diffTheta * s.diffPhi;
+    std::vector<float> specMoments(nTexels * size_t(nSpecV) * 2), diffMag(nTexels * size_t(nDiffV));
+    tbb::this_task_arena::isolate([&] {
+        tbb::parallel_for(0, nSpecV + nDiffV, [&](int v) {
+            const bool diffuse = v >= nSpecV;
+            const int vi = diffuse ? v - nSpecV : v;
+            const int nt = diffuse ? s.diffTheta : s.specTheta, np = diffuse ? s.diffPhi : s.specPhi;
+            const Vec3 wo = viewDir(viewTheta(vi / np, nt), viewPhi(vi % np, np));
+            int w = size_;
+            std::vector<double> cur(size_t(w) * w * 2);
+            for (size_t q = 0; q < cur.size() / 2; ++q) {
+                const Vec3 woT = glm::transpose(rot[q]) * wo;
+                if (!(woT.z > 1e-6f)) {
+                    cur[2 * q] = cur[2 * q + 1] = 0.0;
+                } else if (diffuse) {
+                    cur[2 * q] = 1.0, cur[2 * q + 1] = 0.0;
+                } else {
+                    const Ltc b = ggxIsotropic(tables, alpha, woT);
+                    cur[2 * q] = b.magnitude, cur[2 * q + 1] = b.fresnel;
+                }
+            }
+            for (int l = 1; l <= levels_; ++l) {
+                const int nw = w / 2;
+                std::vector<double> next(size_t(nw) * nw * 2);
+                for (int y = 0; y < nw; ++y)
+                    for (int x = 0; x < nw; ++x)
+                        for (int c = 0; c < 2; ++c)
+                            next[(size_t(y) * nw + x) * 2 + c] =
+                                0.25 * (cur[(size_t(2 * y) * w + 2 * x) * 2 + c] + cur[(size_t(2 * y) * w + 2 * x + 1) * 2 + c] +
+                                        cur[(size_t(2 * y + 1) * w + 2 * x) * 2 + c] +
+                                        cur[(size_t(2 * y + 1) * w + 2 * x + 1) * 2 + c]);
+                cur.swap(next);
+                w = nw;
+                for (size_t t = 0; t < size_t(w) * w; ++t) {
+                    const size_t flat = levelOffset_[size_t(l)] + t;
+                    if (diffuse) {
+                        diffMag[flat * size_t(nDiffV) + size_t(vi)] = float(cur[2 * t]);
+                    } else {
+                        specMoments[(flat * size_t(nSpecV) + size_t(vi)) * 2] = float(cur[2 * t]);
+                        specMoments[(flat * size_t(nSpecV) + size_t(vi)) * 2 + 1] = float(cur[2 * t + 1]);
+                    }
+                }
+            }
+        });
+    });
 
     // One texel of one level: its plan, then every view. Texels are independent, so the result does not depend on
     // how TBB splits the range. isolate(): a render thread that triggers a fit while holding a lock cannot pick up
@@ -264,7 +320,6 @@ void NormalMapLtcPrefilter::fitAll() {
         const size_t local = flat - levelOffset_[size_t(l)];
         const int tx = int(local % size_t(w)), ty = int(local / size_t(w));
         planTile(size_, l, tx, ty, s.maxSamples, plan);
-        const float nTotal = float(plan.size());
         for (int pass = 0; pass < 2; ++pass) {
             const bool diffuse = pass == 1;
             const int nt = diffuse ? s.diffTheta : s.specTheta, np = diffuse ? s.diffPhi : s.specPhi;
@@ -274,7 +329,7 @@ void NormalMapLtcPrefilter::fitAll() {
                     const Vec3 wo = viewDir(theta, phi);
                     const Mat3 align = toViewAligned(float(phi));
                     dirs.clear();
-                    double wsum = 0.0, fsum = 0.0;
+                    double wsum = 0.0;
                     for (const PlannedSample& ps : plan) {
                         const Mat3& R = rot[size_t(ps.texel)];
                         const Vec3 woT = glm::transpose(R) * wo;
@@ -289,9 +344,6 @@ void NormalMapLtcPrefilter::fitAll() {
                             if (!(wiT.z > 0.f)) continue;
                             const float lo = ggx::lambda(woT, alpha, alpha), li = ggx::lambda(wiT, alpha, alpha);
                             weight = (1.f + lo) / (1.f + lo + li);
-                            const float c = 1.f - std::min(std::max(glm::dot(woT, h), 0.f), 1.f);
-                            const float c2 = c * c;
-                            fsum += double(weight) * double(c2 * c2 * c);  // the Schlick moment (1 − wo·h)⁵
                         } else {
                             // Cosine sample (Malley) in the texel frame: Lambert f·cos has unit albedo per texel.
                             const float r = std::sqrt(ps.u.x), ph = kTwoPi * ps.u.y;
@@ -302,10 +354,11 @@ void NormalMapLtcPrefilter::fitAll() {
                     }
                     Ltc fit;
                     if (!dirs.empty() && wsum > 0.0) fit = fitStudentT(dirs, Vec3(1, 0, 0), s.iterations);
-                    // The eBRDF is the equal-weight mixture over the footprint texels (thesis Eq. 3.5): its albedo is
-                    // the mean weight over every planned sample, facing or not.
-                    fit.magnitude = float(wsum / double(nTotal));
-                    fit.fresnel = diffuse ? 0.f : float(fsum / double(nTotal));
+                    // The eBRDF is the equal-weight mixture over the footprint texels (thesis eq. 3.5): its albedo
+                    // and Fresnel moment are the exact footprint means computed above.
+                    const size_t vi = size_t(j * np + k);
+                    fit.magnitude = diffuse ? diffMag[flat * size_t(nDiffV) + vi] : specMoments[(flat * size_t(nSpecV) + vi) * 2];
+                    fit.fresnel = diffuse ? 0.f : specMoments[(flat * size_t(nSpecV) + vi) * 2 + 1];
                     std::vector<uint16_t>& dst = diffuse ? diffuse_ : spec_;
                     storeRecord(&dst[(flat * size_t(nt * np) + size_t(j * np + k)) * kRecordHalfs], fit);
                 }
@@ -331,8 +384,26 @@ NormalMapLtcPrefilter NormalMapLtcPrefilter::build(const std::vector<Vec3>& norm
 
 // ---- lookup -------------------------------------------------------------------------------------------------------
 
+void NormalMapLtcPrefilter::thetaScales(float theta, const LtcTables& tables, float* out) const {
+    // Magnitude and Fresnel moment are interpolated in θ as ratios to those of the flat surface (the base table at
+    // the same α): the albedo's curvature in θ near grazing is mostly the flat GGX's, which the ratio divides out
+    // (a flat map is then exact between the view rows; plain linear interpolation was off by 6e-3 at 68°).
+    const int nt = settings_.specTheta;
+    out[0] = out[1] = out[2] = out[3] = 1.f;
+    if (nt < 2) return;
+    float tt = std::min(std::max(float(double(theta) / kThetaMax) * float(nt - 1), 0.f), float(nt - 1));
+    const int j0 = std::min(int(std::floor(tt)), nt - 2);
+    const float a = std::max(settings_.alpha, 1e-3f);
+    const Ltc at = ggxIsotropic(tables, a, Vec3(std::sin(theta), 0.f, std::cos(theta)));
+    for (int r = 0; r < 2; ++r) {
+        const Ltc node = ggxIsotropic(tables, a, viewDir(viewTheta(j0 + r, nt), 0.0));
+        if (node.magnitude > 1e-4f) out[r] = at.magnitude / node.magnitude;
+        if (node.fresnel > 1e-4f) out[2 + r] = at.fresnel / node.fresnel;
+    }
+}
+
 void NormalMapLtcPrefilter::accumulateStored(int level, int x, int y, float theta, float phi, float w, bool diffuse,
-                                             float* accRaw) const {
+                                             const float* scales, float* accRaw) const {
     Acc& acc = *reinterpret_cast<Acc*>(accRaw);
     const int nt = diffuse ? settings_.diffTheta : settings_.specTheta, np = diffuse ? settings_.diffPhi : settings_.specPhi;
     const std::vector<uint16_t>& src = diffuse ? diffuse_ : spec_;
@@ -347,19 +418,25 @@ void NormalMapLtcPrefilter::accumulateStored(int level, int x, int y, float thet
     int k0 = ((int(fp0) % np) + np) % np, k1 = (k0 + 1) % np;
     const size_t flat = levelOffset_[size_t(level)] + size_t(y) * size_t(size_ >> level) + size_t(x);
     const int j1 = std::min(j0 + 1, nt - 1);
-    const std::pair<int, float> views[4] = {{j0 * np + k0, (1.f - ft) * (1.f - fp)},
-                                            {j0 * np + k1, (1.f - ft) * fp},
-                                            {j1 * np + k0, ft * (1.f - fp)},
-                                            {j1 * np + k1, ft * fp}};
-    for (const auto& [v, wv] : views) {
-        const float ww = w * wv;
+    // scales = (mag row j0, mag row j1, fres row j0, fres row j1): see thetaScales.
+    const float sm[2] = {scales ? scales[0] : 1.f, scales ? scales[1] : 1.f};
+    const float sf[2] = {scales ? scales[2] : 1.f, scales ? scales[3] : 1.f};
+    const struct {
+        int view, row;
+        float w;
+    } views[4] = {{j0 * np + k0, 0, (1.f - ft) * (1.f - fp)},
+                  {j0 * np + k1, 0, (1.f - ft) * fp},
+                  {j1 * np + k0, 1, ft * (1.f - fp)},
+                  {j1 * np + k1, 1, ft * fp}};
+    for (const auto& e : views) {
+        const float ww = w * e.w;
         if (ww == 0.f) continue;
-        const uint16_t* rec = &src[(flat * size_t(nt * np) + size_t(v)) * kRecordHalfs];
-        const float mag = glm::unpackHalf1x16(rec[9]);
+        const uint16_t* rec = &src[(flat * size_t(nt * np) + size_t(e.view)) * kRecordHalfs];
+        const float mag = glm::unpackHalf1x16(rec[9]) * sm[e.row];
         const float wm = ww * mag;
-        for (int e = 0; e < 9; ++e) acc.m[e] += wm * glm::unpackHalf1x16(rec[e]);
+        for (int k = 0; k < 9; ++k) acc.m[k] += wm * glm::unpackHalf1x16(rec[k]);
         acc.mag += wm;
-        acc.fres += ww * glm::unpackHalf1x16(rec[10]);
+        acc.fres += ww * glm::unpackHalf1x16(rec[10]) * sf[e.row];
     }
 }
 
@@ -378,16 +455,18 @@ LtcPair NormalMapLtcPrefilter::baseTexelLtc(int x, int y, const Vec3& wo, const 
     return p;
 }
 
-LtcPair NormalMapLtcPrefilter::texelLtc(int level, int x, int y, const Vec3& wo) const {
+LtcPair NormalMapLtcPrefilter::texelLtc(int level, int x, int y, const Vec3& wo, const LtcTables& tables) const {
     if (level < 1 || level > levels_ || !(wo.z > 0.f)) return zeroPair();
     const float theta = std::acos(std::min(wo.z, 1.f));
     float phi = std::atan2(wo.y, wo.x);
     if (phi < 0.f) phi += kTwoPi;
     const Mat3 back = toViewAligned(phi);
+    float scales[4];
+    thetaScales(theta, tables, scales);
     LtcPair out;
     for (int d = 0; d < 2; ++d) {
         Acc v, g;
-        accumulateStored(level, x, y, theta, phi, 1.f, d == 1, reinterpret_cast<float*>(&v));
+        accumulateStored(level, x, y, theta, phi, 1.f, d == 1, d == 1 ? nullptr : scales, reinterpret_cast<float*>(&v));
         (d ? out.diffuse : out.spec) = finish(g, v, back);
     }
     out.diffuse.fresnel = 0.f;
@@ -404,6 +483,8 @@ LtcPair NormalMapLtcPrefilter::lookupLevel(float level, Vec2 uv, const Vec3& wo,
     const int l0 = std::min(int(std::floor(level)), levels_);
     const float f = l0 < levels_ ? level - float(l0) : 0.f;
     Acc gs, gd, vs, vd;  // geometric-frame (level 0) and view-aligned (stored levels) sums, specular and diffuse
+    float scales[4] = {1.f, 1.f, 1.f, 1.f};
+    if (l0 + (f > 0.f ? 1 : 0) >= 1) thetaScales(theta, tables, scales);
     for (int pass = 0; pass < 2; ++pass) {
         const int l = l0 + pass;
         const float wl = pass == 0 ? 1.f - f : f;
@@ -432,8 +513,8 @@ LtcPair NormalMapLtcPrefilter::lookupLevel(float level, Vec2 uv, const Vec3& wo,
                     gd.mag += w;
                 }
             } else {
-                accumulateStored(l, x, y, theta, phi, w, false, reinterpret_cast<float*>(&vs));
-                accumulateStored(l, x, y, theta, phi, w, true, reinterpret_cast<float*>(&vd));
+                accumulateStored(l, x, y, theta, phi, w, false, scales, reinterpret_cast<float*>(&vs));
+                accumulateStored(l, x, y, theta, phi, w, true, nullptr, reinterpret_cast<float*>(&vd));
             }
         }
     }
