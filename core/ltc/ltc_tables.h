@@ -4,26 +4,39 @@
 
 #include "core/ltc/ltc.h"
 
+#include <cstddef>
 #include <string>
 #include <vector>
 
 namespace specula::ltc {
 
-// All tables in float, laid out as documented at each member (ltc-filtering.md §2 "Packing", §3 step 5).
+// All tables in float, laid out as documented at each member (ltc-filtering.md §2 "Packing", §3 step 5; docs/ltc-tables.md).
+// The isotropic tables are 64×64 textures: texel (x = a, y = t) is cell index t·64 + a, with a the roughness index
+// (r = a/63, α = max(r², 1e-5)) and t the view index (cos θ = 1 − (t/63)², θ <= 1.57).
 struct LtcTables {
     static constexpr int kIsoSize = 64;
-    // [OWNED BY THE TABLE HELPER: exact members and layouts are documented here when implemented]
-    std::vector<float> ggxInv;      // isotropic GGX: normalised inv(M) entries per (roughness, view) cell
-    std::vector<float> ggxMagFres;  // (mag, fres) per cell
-    std::vector<float> sphere;      // scale(z, len), 64×64
+    // Isotropic GGX, Nelder-Mead (§2): inv(M) of the view-aligned frame (v = (sin θ, 0, cos θ)) divided by its (1,1)
+    // entry, whose non-trivial entries are stored as RGBA per cell: (row, col) = (0,0), (2,0), (0,2), (2,2), i.e.
+    // inv = [[x, 0, z], [0, 1, 0], [y, 0, w]] (ltc_code's texture 1). 64·64·4 floats.
+    std::vector<float> ggxInv;
+    // (mag, fres) per cell: mag = ∫ f·cos (F = 1), fres = ∫ f·cos·(1 − v·h)⁵ (ltc_code's texture 2, .xy). 64·64·2.
+    std::vector<float> ggxMagFres;
+    // scale(z, len) of the clip-free path (§3 step 5): texel (x, y) = y·64 + x with z = 2x/63 − 1, len = y/63. 64·64.
+    std::vector<float> sphere;
+    // Anisotropic GGX by t-EM (§5.2): anisoSize values each of αx (index i), αy (j), θ (t), and anisoPhiSize of φ (k)
+    // (node values: ltc_fit.h anisoAlpha/anisoCosTheta/anisoPhi). Cell index ((k·n + t)·n + j)·n + i, n = anisoSize.
+    // The lobe frame's wo = (sin θ cos φ, sin θ sin φ, cos θ) with φ in [0, π/2] (the other quadrants by mirror symmetry).
     int anisoSize = 0;
-    std::vector<float> anisoInv;      // anisotropic GGX: inv(M) per (αx, αy, θ, φ) cell
+    int anisoPhiSize = 0;
+    std::vector<float> anisoInv;      // inv(M) of the lobe frame scaled to determinant 1, glm column-major (9 per cell)
     std::vector<float> anisoMagFres;  // (mag, fres) per cell
-    // FNV-1a 64 of every table's bytes (hex): the golden hash of the committed tables.
+    // FNV-1a 64 (hex) over, in this order, for each of ggxInv, ggxMagFres, sphere, anisoInv, anisoMagFres: its element
+    // count as a little-endian uint64 then its float bytes; then anisoSize and anisoPhiSize as int32. The golden hash
+    // of the committed tables (byte order of the host; all supported hosts are little-endian).
     std::string hash() const;
 };
 
-// The committed tables (core/ltc/ltc_tables_data.cpp), built once on first use.
+// The committed tables (core/ltc/ltc_tables_data.cpp), built once on first use (thread-safe).
 const LtcTables& builtinTables();
 
 // Isotropic GGX lobe (roughness α, unit wo in the lobe frame, any azimuth): the LTC in the lobe frame (the rotation
@@ -33,5 +46,27 @@ Ltc ggxIsotropic(const LtcTables& t, float alpha, const Vec3& wo);
 Ltc ggxAnisotropic(const LtcTables& t, float alphaX, float alphaY, const Vec3& wo);
 // The sphere (horizon) table of the clip-free path: scale(z, len) with z = F_z/|F|, len = |F| (§3 step 5).
 float sphereScale(const LtcTables& t, float z, float len);
+
+// GL_LINEAR / CLAMP_TO_EDGE sampling of an n×n table with 'channels' floats per texel at texture coordinates (u, v),
+// texel centres at (i + 0.5)/n, written out so a GLSL texture() port matches. Callers map a node coordinate c in
+// [0, 1] to c·(n−1)/n + 0.5/n (ltc_code's LUT_SCALE/LUT_BIAS).
+void sampleBilinear(const float* table, int n, int channels, float u, float v, float* out);
+
+// The generated data (core/ltc/ltc_tables_data.cpp, written by tools/ltc-fit).
+namespace generated {
+extern const float kGgxInv[];
+extern const size_t kGgxInvCount;
+extern const float kGgxMagFres[];
+extern const size_t kGgxMagFresCount;
+extern const float kSphere[];
+extern const size_t kSphereCount;
+extern const int kAnisoSize;
+extern const int kAnisoPhiSize;
+extern const float kAnisoInv[];
+extern const size_t kAnisoInvCount;
+extern const float kAnisoMagFres[];
+extern const size_t kAnisoMagFresCount;
+extern const char kHash[];  // LtcTables::hash() of these tables, as the tool computed it
+}  // namespace generated
 
 }  // namespace specula::ltc
