@@ -192,6 +192,17 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
                     // ∝ that lobe's own integrand over the light (samplePolygon), so the ratio is its visibility
                     // and E[U_j·V] is exactly the shadowed integral: fully lit or fully shadowed pixels are noise-free.
                     const Vec3 lightNormal = glm::cross(poly[1] - poly[0], poly[2] - poly[0]);
+                    // Lobes that integrate but cannot sample the polygon: the visibility of one light sample (exact
+                    // when unoccluded, biased in penumbrae), computed once.
+                    int lightVisible = -1;
+                    auto lightSampleVisible = [&]() {
+                        if (lightVisible < 0) {
+                            LightSample lv;
+                            lightVisible = light.sample(sp.pGeom, u, lv) && glm::dot(lv.wi, sp.ng) > 0.f &&
+                                           !accel_.occluded(shadowRay(sp, lv));
+                        }
+                        return lightVisible == 1;
+                    };
                     int rank = 0;
                     for (int j = 0; j < closure.size(); ++j) {
                         if (!((analytic[li] >> j) & 1) || maxComponent(perLobe[j]) <= 0.f) continue;
@@ -200,14 +211,17 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
                                               : Vec2(PixelSampler::unitFloat(sampler.bits(key * 2)),
                                                      PixelSampler::unitFloat(sampler.bits(key * 2 + 1)));
                         Vec3 wj;
-                        if (!closure.samplePolygon(q, j, poly, n, uj, sampler.bits(~key), wj)) continue;
-                        if (glm::dot(wj, sp.ng) <= 0.f) continue;  // below the geometric surface, as sampled NEE
-                        float den = glm::dot(wj, lightNormal);
-                        if (den == 0.f) continue;
-                        LightSample lj;
-                        lj.wi = wj;
-                        lj.distance = glm::dot(poly[0], lightNormal) / den;
-                        if (!(lj.distance > 0.f) || accel_.occluded(shadowRay(sp, lj))) continue;
+                        if (closure.samplePolygon(q, j, poly, n, uj, sampler.bits(~key), wj)) {
+                            if (glm::dot(wj, sp.ng) <= 0.f) continue;  // below the geometric surface, as sampled NEE
+                            float den = glm::dot(wj, lightNormal);
+                            if (den == 0.f) continue;
+                            LightSample lj;
+                            lj.wi = wj;
+                            lj.distance = glm::dot(poly[0], lightNormal) / den;
+                            if (!(lj.distance > 0.f) || accel_.occluded(shadowRay(sp, lj))) continue;
+                        } else if (!lightSampleVisible()) {
+                            continue;
+                        }
                         BsdfEval fj;
                         (closure.lobe(j)->kind() == LobeKind::Diffuse ? fj.diffuse : fj.specular) = perLobe[j];
                         addLightSample(out, beta, depth, fj, Lp, clamp);

@@ -21,7 +21,9 @@ namespace {
 
 // Pixel-filter importance sampling: offset from the pixel centre, in pixels.
 Vec2 filterOffset(const RenderSettings& rs, const Vec2& u) {
-    if (rs.pixelCenter && rs.spp == 1) return Vec2(0.f);
+    // Scenes may ask for it at spp = 1 only (the loader checks); in-process tests use it at any spp to measure the
+    // noise of a shading estimator without pixel-coverage noise.
+    if (rs.pixelCenter) return Vec2(0.f);
     if (rs.filter == PixelFilterKind::Box) return u - Vec2(0.5f);
     // Gaussian: Box-Muller with σ = sqrt(σ²); untruncated, so the estimator is the exact Gaussian filter.
     float sigma = std::sqrt(rs.gaussianSigma2);
