@@ -479,6 +479,7 @@ LtcPair NormalMapLtcPrefilter::lookupLevel(float level, Vec2 uv, const Vec3& wo,
     float phi = std::atan2(wo.y, wo.x);
     if (phi < 0.f) phi += kTwoPi;
     if (!(level > 0.f)) level = 0.f;  // also NaN
+    if (!std::isfinite(uv.x) || !std::isfinite(uv.y)) uv = Vec2(0.f);  // keeps the texel indices defined
     level = std::min(level, float(levels_));
     const int l0 = std::min(int(std::floor(level)), levels_);
     const float f = l0 < levels_ ? level - float(l0) : 0.f;

@@ -63,8 +63,10 @@ enum class CacheOutcome : uint8_t { Fitted, Loaded, FittedAfterInvalidCache, Fit
 // per-texel ground truth: the mean weight of 256 stratified samples is biased by up to ~1% at α ≈ 0.1.
 // Storage: per LTC 11 half floats, inv(M) normalised to unit Frobenius norm (9), magnitude and Fresnel moment
 // (22 bytes; the thesis stored 9 floats, no magnitude). 128² at the default grids: 5461 texels × 136 views × 22 B
-// = 16.3 MB (thesis: 26.7 MB). Cost: one t-EM fit per (texel, view), ~60 µs: ~743k fits at 128²; 256² quadruples
-// everything (65 MB, ~4× the time) and is allowed but not recommended.
+// = 16.3 MB (thesis: 26.7 MB). Cost: one t-EM fit per (texel, view) with its samples, ~50 µs of CPU: 743k fits at
+// 128², measured 19.3 s wall on 2 shared cores (bench_ltc_prefilter; the thesis: ~4 h on a GPU); 256² quadruples
+// everything (65 MB, ~4× the time) and is allowed but not recommended. Temporary memory: 2 floats per stored texel
+// and view plus one level-0 copy per view in flight.
 // Deterministic: no random state (stratified grids, integer hashes), texels fitted independently in parallel (TBB),
 // so the result does not depend on the thread count.
 class NormalMapLtcPrefilter {

@@ -184,8 +184,9 @@ void reg(NodeRegistry& r) {
     s.doc = "Normal-mapped GGX (base roughness per texel) plus Lambert, filtered over the pixel footprint by prefiltered "
             "LTCs (Nahmias 2022; Student-t EM fits per MIP texel and view, ltc-filtering.md §5.3): one specular and one "
             "diffuse LTC lobe in the geometric tangent frame; analytic under quad lights. Tables are fitted on the first "
-            "shading point (~60 us per texel and view; 128^2: ~743k fits) and cached on disk by content hash "
-            "($SPECULA_CACHE_DIR/ltc). CPU only: the GLSL function is a stub that returns no lobe.";
+            "shading point (one fit per MIP texel and view; 128^2: 743k fits, ~20 s on 2 cores) and cached on disk by "
+            "content hash ($SPECULA_CACHE_DIR/ltc). CPU only: the GLSL function is a stub that returns no lobe (the "
+            "tables depend on the roughness, which a prepare step cannot read, so no GPU resource can hold them).";
     s.inputs = kParams.ports();
     s.outputs = kOutputs.ports();
     s.flags = kNeedsDerivatives;
