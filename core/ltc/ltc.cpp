@@ -40,7 +40,7 @@ double sphereHorizon(const DVec3& F, const LtcTables* tables) {
     double len = glm::length(F);
     if (len <= 0.0) return 0.0;
     double z = std::clamp(F.z / len, -1.0, 1.0);
-    (void)tables;  // LTC-TABLES-MERGE: tabulated scale once core/ltc/ltc_tables.cpp lands
+    if (tables) return len * double(sphereScale(*tables, float(z), float(len)));  // as the GPU does
     // The cap centred on the normal with form factor sin²σ = |F| (a cap's vector form factor has that length).
     double sigma = std::asin(std::sqrt(std::min(len, 1.0)));
     return capFormFactor(std::acos(z), sigma);
@@ -146,6 +146,11 @@ double integrate(const Ltc& ltc, const Vec3* vertices, int n, bool twoSided, Hor
     return clampedCosineIntegral(v, n, twoSided, horizon, tables);
 }
 
+double integrateForLobe(const Ltc& ltc, const Vec3* vertices, int n, uint8_t horizon) {
+    const Horizon h = Horizon(horizon);
+    return integrate(ltc, vertices, n, false, h, h == Horizon::Clipless ? &builtinTables() : nullptr);
+}
+
 namespace {
 // Extent of the projection (x, y) of the great-circle arc a->b (unit, z ≥ 0) onto the disk.
 void arcBounds(const DVec3& a, const DVec3& b, double& x0, double& x1, double& y0, double& y1) {
@@ -240,7 +245,7 @@ bool LtcLobe::integratePolygon(const LobeQuery& q, const Vec3* vertices, int cou
         result = Color3(0.f);
         return true;
     }
-    double e = integrate(ltc_, vertices, count, false, Horizon(q.polygonHorizon), nullptr);
+    double e = integrateForLobe(ltc_, vertices, count, q.polygonHorizon);
     result = tint_ * float(ltc_.magnitude * e);
     return true;
 }

@@ -48,6 +48,9 @@ double clampedCosineIntegral(const DVec3* v, int n, bool twoSided, Horizon horiz
 // ∫_P D over a polygon given in the LTC's lobe frame (transforms by invM, then clampedCosineIntegral).
 double integrate(const Ltc& ltc, const Vec3* vertices, int n, bool twoSided, Horizon horizon,
                  const LtcTables* tables);
+// What the lobes use: one-sided (lights orient their polygons), and Clipless reads the shipped sphere table, so the
+// CPU's clip-free path is the GPU's (Clip is exact and needs no table).
+double integrateForLobe(const Ltc& ltc, const Vec3* vertices, int n, uint8_t horizon);
 
 // Draws w ∝ D restricted to the polygon (vertices in the LTC's lobe frame, relative to the shading point, oriented as
 // for clampedCosineIntegral): Malley's method in cosine space, i.e. a uniform point of the clipped polygon's

@@ -253,7 +253,17 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
             addLightSample(out, beta, depth, v.f, ls.L * (w / ls.pdf), clamp);
         }
 
-        // BSDF sampling: hits emitters (MIS) and continues the path.
+        // BSDF sampling: hits emitters (MIS) and continues the path. At the last vertex its only use is the MIS hit of
+        // a light that is not fully integrated analytically: skip the ray when there is none (render.area_lights).
+        if (depth >= maxDepth_) {
+            bool useful = false;
+            for (size_t li = 0; li < scene_.lights.size() && !useful; ++li) {
+                const Light& l = *scene_.lights[li];
+                if (l.isDelta()) continue;
+                useful = li >= kMaxAnalyticLights || (closure.allLobes() & ~analytic[li]) != 0;
+            }
+            if (!useful) break;
+        }
         BsdfSample bs;
         float uLobe = sampler.get1D();
         Vec2 uDir = sampler.get2D();

@@ -381,12 +381,27 @@ public:
     }
 };
 
+// GGX without a closed form over polygons (GgxLobe has its LTC): forwards everything but integratePolygon.
+class SampledOnlyGgxLobe final : public BsdfLobe {
+public:
+    SampledOnlyGgxLobe(float alpha, const Fresnel& f) : ggx_(alpha, alpha, f) {}
+    LobeKind kind() const override { return LobeKind::Specular; }
+    using BsdfLobe::sample;
+    LobeValue evalPdf(const LobeQuery& q) const override { return ggx_.evalPdf(q); }
+    bool sample(const LobeQuery& q, const Vec2& u, Vec3& wi) const override { return ggx_.sample(q, u, wi); }
+    Color3 albedo(const Vec3& wo) const override { return ggx_.albedo(wo); }
+    const char* modelName() const override { return "sampled_only_ggx"; }
+
+private:
+    GgxLobe ggx_;
+};
+
 // Analytic Lambert plus a sampled GGX lobe (no closed form): integratePolygon handles only the diffuse lobe.
 class AnalyticLambertPlusGgxMaterial final : public Material {
 public:
     void shade(const ShadingPoint& sp, ScratchArena& arena, Closure& out, Color3* emission) const override {
         out.add(Color3(1.f), arena.make<AnalyticLambertLobe>(Color3(0.5f)), sp.frame);
-        out.add(Color3(1.f), arena.make<GgxLobe>(0.3f, 0.3f, Fresnel::schlick(Color3(0.5f))), sp.frame);
+        out.add(Color3(1.f), arena.make<SampledOnlyGgxLobe>(0.3f, Fresnel::schlick(Color3(0.5f))), sp.frame);
     }
 };
 class LambertPlusGgxMaterial final : public Material {

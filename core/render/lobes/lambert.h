@@ -26,7 +26,7 @@ public:
     // The cosine lobe is the LTC with M = I: its polygon integral is Lambert's form factor, exact (HDHN16 §4).
     bool integratePolygon(const LobeQuery& q, const Vec3* vertices, int count, Color3& result) const override {
         result = q.wo.z > 0.f
-                     ? albedo_ * float(ltc::integrate(ltc::Ltc{}, vertices, count, false, ltc::Horizon(q.polygonHorizon), nullptr))
+                     ? albedo_ * float(ltc::integrateForLobe(ltc::Ltc{}, vertices, count, q.polygonHorizon))
                      : Color3(0.f);
         return true;
     }

@@ -384,6 +384,27 @@ public:
         out.push_back({"filtered_alpha", {std::sqrt(Ab.a), std::sqrt(Ab.d)}});
     }
 
+    // Quad lights: the LTC of GGX with the sampling matrix Ā_s (for normal-based filters and `none` the exact filtered
+    // matrix; for half-vector filters the filter at the mirror configuration, which is what the lobe samples), via
+    // its principal axes in the anisotropic table (ltc::ggxRoughnessMatrix).
+    bool integratePolygon(const LobeQuery& q, const Vec3* vertices, int count, Color3& result) const override {
+        result = q.wo.z > 0.f ? tint_ * ltc::integrateGgx(polygonLtc(q.wo), fresnel_, vertices, count, q.polygonHorizon)
+                              : Color3(0.f);
+        return true;
+    }
+    bool samplePolygon(const LobeQuery& q, const Vec3* vertices, int count, const Vec2& u, uint64_t seed,
+                       Vec3& wi) const override {
+        return q.wo.z > 0.f && ltc::samplePolygon(polygonLtc(q.wo), vertices, count, u, seed, wi);
+    }
+    ltc::Ltc polygonLtc(const Vec3& wo) const {  // cached per wo, as GgxLobe::polygonLtc
+        if (!(ltcValid_ && wo == ltcWo_)) {
+            ltc_ = ltc::ggxRoughnessMatrix(ltc::builtinTables(), sampling_.a, sampling_.c, sampling_.d, wo);
+            ltcWo_ = wo;
+            ltcValid_ = true;
+        }
+        return ltc_;
+    }
+
     const Sym2& unfiltered() const { return s_.A; }
     const Sym2& samplingMatrix() const { return sampling_; }
     double tau() const { return tau_; }
@@ -393,6 +414,7 @@ public:
         D3 wi(-wo.x, -wo.y, wo.z);
         sampling_ = filtered(wo, wi, 0.0, false);
         samplingL_ = cholesky(sampling_);
+        ltcValid_ = false;
     }
 
 private:
@@ -406,6 +428,9 @@ private:
     bool halfVector_ = false;
     Sym2 fixed_, sampling_;
     Chol2 samplingL_;
+    mutable ltc::Ltc ltc_;
+    mutable Vec3 ltcWo_{0.f};
+    mutable bool ltcValid_ = false;
 };
 
 }  // namespace specula::fggx
