@@ -102,15 +102,31 @@ json literal(const PortSpec& p, const float* v) {
 // Grid points of one node, one factor at a time around the defaults: "defaults"; per numeric port (not bound to the
 // geometry: those come from the shading point) the values at 10 % and 90 % of its documented range in every
 // component, and for vector ports a mixed point (90 %, 50 %, 10 %); per enum port every non-default value.
-// 'needsFile' is set for a node with a free string port (a file): such a node cannot be conformance-tested.
+// 'needsFile' is set for a node with a free string port (a file) that kFileInputs gives no value: such a node cannot be
+// conformance-tested.
+// Values of free string ports (files) for the suite, given to every grid point of the node.
+struct FileInput {
+    const char* node;
+    const char* port;
+    const char* value;
+};
+const FileInput kFileInputs[] = {
+    // A generated 16² flakes map (no texture store needed); the suite's footprint is far below a texel, so this
+    // exercises the level-0 lobes (per-texel base LTCs); the prefiltered levels are tested in test_ltc_prefilter.cpp.
+    {"bsdf.ltc_normal_map", "normal_map", "generate:flakes:16:7"},
+};
 std::vector<std::pair<std::string, json>> gridPoints(const NodeSpec& s, bool* needsFile = nullptr) {
     std::vector<std::pair<std::string, json>> g = {{"defaults", json::object()}};
     if (needsFile) *needsFile = false;
+    json files = json::object();
     for (const PortSpec& p : s.inputs) {
         if (p.type == TypeDesc::Closure || p.binding != GeomBinding::None) continue;
         if (p.type == TypeDesc::String) {
             if (p.enumValues.empty()) {
-                if (needsFile) *needsFile = true;
+                bool given = false;
+                for (const FileInput& f : kFileInputs)
+                    if (s.id == f.node && p.name == f.port) files[p.name] = f.value, given = true;
+                if (!given && needsFile) *needsFile = true;
                 continue;
             }
             for (const std::string& v : p.enumValues)
@@ -130,6 +146,7 @@ std::vector<std::pair<std::string, json>> gridPoints(const NodeSpec& s, bool* ne
             g.push_back({p.name + "_mixed", json{{p.name, literal(p, v)}}});
         }
     }
+    for (auto& point : g) point.second.update(files);
     return g;
 }
 
@@ -419,8 +436,16 @@ const ReciprocalOnlyAt kReciprocalOnlyAt[] = {
      "GGAA convolves the glint NDF with a kernel from the derivative of the half vector along the viewer's footprint, "
      "which is not symmetric in wo and wi"},
 };
+// Lobes that are never reciprocal.
+const ReciprocalOnlyAt kNeverReciprocal[] = {
+    {"bsdf.ltc_normal_map", "", "",
+     "its lobes are LTCs fitted for the shading view (f·cos = mag·D(wi) for that wo only): swapping wo and wi does not "
+     "swap the lobe"},
+};
 Reciprocity reciprocityOf(const Case& c) {
     Reciprocity r;
+    for (const ReciprocalOnlyAt& e : kNeverReciprocal)
+        if (c.node == e.node) r.reciprocal = false, r.why = e.why;
     const NodeSpec* spec = NodeRegistry::instance().find(c.node);
     for (const ReciprocalOnlyAt& e : kReciprocalOnlyAt) {
         if (c.node != e.node) continue;
@@ -602,10 +627,11 @@ TEST(LobeConformanceRegistry, EveryBsdfNodeIsConformanceTested) {
         if (!isBsdfNode(*s)) continue;
         SCOPED_TRACE(s->id);
         bool needsFile = false;
-        gridPoints(*s, &needsFile);
-        EXPECT_FALSE(needsFile) << "a BSDF node with a free string (file) port: give the suite a test file for it";
+        const auto grid = gridPoints(*s, &needsFile);
+        EXPECT_FALSE(needsFile) << "a BSDF node with a free string (file) port: give the suite a test file for it (kFileInputs)";
+        if (needsFile) continue;
         Shaded sh;
-        shade(s->id, json::object(), views()[1].wo, sh);
+        shade(s->id, grid[0].second, views()[1].wo, sh);  // the defaults (with the kFileInputs values)
         if (s->has(kEmissive)) {
             // bsdf.emission scatters nothing: its closure is empty, so it has no lobe to test.
             EXPECT_TRUE(sh.closure.empty()) << "an emissive bsdf node that also scatters: remove it from this branch";
