@@ -178,6 +178,53 @@ void arcBounds(const DVec3& a, const DVec3& b, double& x0, double& x1, double& y
 }
 }  // namespace
 
+namespace {
+// Highest z of the great-circle arc a->b (unit vectors).
+double arcMaxZ(const DVec3& a, const DVec3& b) {
+    double z = std::max(a.z, b.z);
+    DVec3 n = glm::cross(a, b);
+    double nl = glm::length(n);
+    if (nl < 1e-12) return z;
+    n /= nl;
+    DVec3 p = DVec3(0, 0, 1) - n * n.z;  // the great circle's highest point
+    double pl = glm::length(p);
+    if (pl < 1e-12) return z;
+    p /= pl;
+    if (glm::dot(glm::cross(a, p), n) >= 0.0 && glm::dot(glm::cross(p, b), n) >= 0.0) z = std::max(z, p.z);
+    return z;
+}
+
+// Interior angle at vertex a of the spherical triangle (a, b, c).
+double vertexAngle(const DVec3& a, const DVec3& b, const DVec3& c) {
+    DVec3 tb = b - a * glm::dot(a, b), tc = c - a * glm::dot(a, c);
+    return std::atan2(glm::length(glm::cross(tb, tc)), glm::dot(tb, tc));
+}
+
+// Uniform point of the spherical triangle (a, b, c) of area 'area' (Arvo 1995, "Stratified sampling of spherical
+// triangles", §2: invert the sub-triangle area, then the arc from b).
+DVec3 sampleSphericalTriangle(const DVec3& a, const DVec3& b, const DVec3& c, double area, double u1, double u2) {
+    const double alpha = vertexAngle(a, b, c);
+    const double ahat = u1 * area;
+    const double s = std::sin(ahat - alpha), t = std::cos(ahat - alpha);
+    const double ca = std::cos(alpha), sa = std::sin(alpha);
+    const double uu = t - ca, vv = s + sa * glm::dot(a, b);
+    const double den = (vv * s + uu * t) * sa;
+    double q = den != 0.0 ? ((vv * t - uu * s) * ca - vv) / den : 1.0;
+    q = std::clamp(q, -1.0, 1.0);
+    DVec3 perp = c - a * glm::dot(c, a);
+    double pl = glm::length(perp);
+    DVec3 chat = pl > 0.0 ? q * a + std::sqrt(std::max(0.0, 1.0 - q * q)) * (perp / pl) : c;
+    double z = 1.0 - u2 * (1.0 - glm::dot(chat, b));
+    DVec3 r = chat - b * glm::dot(chat, b);
+    double rl = glm::length(r);
+    return rl > 0.0 ? z * b + std::sqrt(std::max(0.0, 1.0 - z * z)) * (r / rl) : b;
+}
+
+double hashUniform(uint64_t seed, uint32_t t, uint32_t k) {
+    return double(mix64(seed ^ (0x9E3779B97F4A7C15ULL * (uint64_t(t) * 4 + k + 1))) >> 11) * 0x1.0p-53;
+}
+}  // namespace
+
 bool samplePolygon(const Ltc& ltc, const Vec3* vertices, int n, const Vec2& u, uint64_t seed, Vec3& w) {
     if (n < 3 || n > 8) return false;
     glm::dmat3 m = toDouble(ltc.invM);
@@ -188,31 +235,59 @@ bool samplePolygon(const Ltc& ltc, const Vec3* vertices, int n, const Vec2& u, u
     int k = clipToUpperHemisphere(v, n, c);
     if (k < 3) return false;
     for (int i = 0; i < k; ++i) c[i] = glm::normalize(c[i]);
+    const double E = exactLoop(c, k);  // ∫_P D_o: the projected area on the disk is π E
+    if (!(E > 0.0)) return false;
     DVec3 edge[9];
-    double x0 = 1, x1 = -1, y0 = 1, y1 = -1;
+    double x0 = 1, x1 = -1, y0 = 1, y1 = -1, zmax = 0;
     for (int i = 0; i < k; ++i) {
         edge[i] = glm::cross(c[i], c[(i + 1) % k]);
         arcBounds(c[i], c[(i + 1) % k], x0, x1, y0, y1);
+        zmax = std::max(zmax, arcMaxZ(c[i], c[(i + 1) % k]));
     }
+    // The extremes of x and y lie on the boundary (the x/y poles are on the horizon, the clipped polygon's edge at
+    // most); z can peak inside: at the zenith, when the polygon contains it.
+    bool zenith = true;
+    for (int i = 0; i < k && zenith; ++i) zenith = edge[i].z >= 0.0;
+    if (zenith) zmax = 1.0;
     x0 = std::max(x0, -1.0), y0 = std::max(y0, -1.0), x1 = std::min(x1, 1.0), y1 = std::min(y1, 1.0);
-    if (!(x1 > x0) || !(y1 > y0)) return false;
-    // Malley: a uniform point of the polygon's projection onto the unit disk, lifted to the hemisphere, is
-    // distributed ∝ cos θ over the spherical polygon. Rejection from the bounding box of the projection.
+    if (!(x1 > x0) || !(y1 > y0) || !(zmax > 0.0)) return false;
+    // Two exact samplers of the density ∝ cos θ on the polygon (cosine space); the one with the higher acceptance is
+    // chosen from the polygon alone (so the choice does not bias the result):
+    // (a) Malley: a uniform point of the polygon's projection onto the unit disk, lifted to the hemisphere, by
+    //     rejection from the projection's exact bounding box (acceptance π E / box area): small or overhead lights;
+    // (b) a uniform point of the spherical polygon (triangle fan, Arvo 1995) kept with probability z / z_max
+    //     (acceptance π E / (Ω z_max)): large or grazing polygons, e.g. thin crescents near the horizon.
+    double area[8], omega = 0;
+    for (int i = 1; i + 1 < k; ++i) {
+        double ar = vertexAngle(c[0], c[i], c[i + 1]) + vertexAngle(c[i], c[i + 1], c[0]) +
+                    vertexAngle(c[i + 1], c[0], c[i]) - kPiD;
+        area[i] = std::max(ar, 0.0);
+        omega += area[i];
+    }
+    const double accBox = kPiD * E / ((x1 - x0) * (y1 - y0));
+    const double accArvo = omega > 0.0 ? kPiD * E / (omega * zmax) : 0.0;
     const glm::dmat3 M = glm::inverse(m);
+    const bool malley = accBox >= accArvo;
     for (uint32_t t = 0; t < 4096; ++t) {
-        double ux = u.x, uy = u.y;
-        if (t > 0) {
-            uint64_t h = mix64(seed ^ (0x9E3779B97F4A7C15ULL * t));
-            ux = double(h >> 11) * 0x1.0p-53;
-            uy = double(mix64(h) >> 11) * 0x1.0p-53;
+        double u0 = t == 0 ? double(u.x) : hashUniform(seed, t, 0), u1 = t == 0 ? double(u.y) : hashUniform(seed, t, 1);
+        DVec3 p;
+        if (malley) {
+            double x = x0 + u0 * (x1 - x0), y = y0 + u1 * (y1 - y0);
+            double r2 = x * x + y * y;
+            if (r2 >= 1.0) continue;
+            p = DVec3(x, y, std::sqrt(1.0 - r2));
+            bool inside = true;
+            for (int i = 0; i < k && inside; ++i) inside = glm::dot(p, edge[i]) >= 0.0;
+            if (!inside) continue;
+        } else {
+            // Pick a fan triangle ∝ its area with u0 (then rescaled for reuse), sample it with (u0', u1).
+            double pick = u0 * omega;
+            int tri = 1;
+            while (tri + 2 < k && pick >= area[tri]) pick -= area[tri++];
+            double ur = area[tri] > 0.0 ? std::clamp(pick / area[tri], 0.0, 1.0) : 0.0;
+            p = sampleSphericalTriangle(c[0], c[tri], c[tri + 1], area[tri], ur, u1);
+            if (hashUniform(seed, t, 2) * zmax >= p.z) continue;
         }
-        double x = x0 + ux * (x1 - x0), y = y0 + uy * (y1 - y0);
-        double r2 = x * x + y * y;
-        if (r2 >= 1.0) continue;
-        DVec3 p(x, y, std::sqrt(1.0 - r2));
-        bool inside = true;
-        for (int i = 0; i < k && inside; ++i) inside = glm::dot(p, edge[i]) >= 0.0;
-        if (!inside) continue;
         w = Vec3(glm::normalize(M * p));
         return true;
     }

@@ -511,6 +511,80 @@ void checkChi2AndPdfOfSample(const Case& c) {
     if (r.acceptance > 0.01) EXPECT_GT(checked, 0);
 }
 
+// Polygon queries (LTC quad lights), for closures whose lobes integrate polygons: the integral is additive over a split
+// of the light, zero seen from behind (one-sided), and each lobe's polygon samples (the shadow-ray directions) fall
+// in the sub-quads in proportion to its sub-integrals (χ², 3 dof) and always inside the light.
+void checkPolygonQueries(const Case& c) {
+    Shaded s;
+    shade(c.node, c.inputs, c.wo, s);
+    const Closure& cl = s.closure;
+    // A tilted quad above the shading point, counter-clockwise seen from it; offsets from the shading point.
+    const Vec3 o(-0.5f, -0.3f, 1.1f), e1(1.1f, 0.2f, 0.f), e2(-0.1f, 0.8f, 0.25f);
+    auto quad = [&](float s0, float s1, float t0, float t1) {
+        std::array<Vec3, 4> q = {o + e1 * s0 + e2 * t0, o + e1 * s1 + e2 * t0, o + e1 * s1 + e2 * t1, o + e1 * s0 + e2 * t1};
+        if (glm::dot(glm::cross(q[1] - q[0], q[2] - q[0]), q[0]) < 0.f) std::swap(q[1], q[3]);
+        return q;
+    };
+    BsdfQuery q;
+    q.wo = c.wo;
+    auto whole = quad(0, 1, 0, 1);
+    BsdfEval all;
+    std::array<Color3, Closure::kMaxLobes> perLobe{};
+    const LobeMask mask = cl.integratePolygon(q, whole.data(), 4, all, perLobe.data());
+    if (mask == 0) return;  // no lobe has a closed form: the renderer samples this closure
+    for (int ch = 0; ch < 3; ++ch) EXPECT_GE(all.total()[ch], 0.f);
+    std::array<Vec3, 4> back = {whole[0], whole[3], whole[2], whole[1]};
+    BsdfEval behind;
+    cl.integratePolygon(q, back.data(), 4, behind);
+    EXPECT_EQ(maxComponent(behind.total()), 0.f) << "a one-sided light seen from behind";
+    std::array<std::array<Vec3, 4>, 4> sub = {quad(0, .5f, 0, .5f), quad(.5f, 1, 0, .5f), quad(0, .5f, .5f, 1), quad(.5f, 1, .5f, 1)};
+    std::array<std::array<Color3, Closure::kMaxLobes>, 4> subLobe{};
+    BsdfEval sum;
+    for (int k = 0; k < 4; ++k) cl.integratePolygon(q, sub[k].data(), 4, sum, subLobe[k].data());
+    for (int ch = 0; ch < 3; ++ch)
+        EXPECT_NEAR(sum.total()[ch], all.total()[ch], 2e-4f * std::max(all.total()[ch], 1e-3f)) << "additivity";
+    auto inside = [](const Vec3& w, const std::array<Vec3, 4>& v) {
+        Vec3 n = glm::cross(v[1] - v[0], v[2] - v[0]);
+        float den = glm::dot(w, n);
+        if (den == 0.f) return false;
+        float t = glm::dot(v[0], n) / den;
+        if (t <= 0.f) return false;
+        Vec3 p = w * t;
+        for (int i = 0; i < 4; ++i)
+            if (glm::dot(glm::cross(v[(i + 1) % 4] - v[i], p - v[i]), n) < -1e-5f * glm::length(n)) return false;
+        return true;
+    };
+    Rng rng(seedOf(c.name()) + 11);
+    for (int j = 0; j < cl.size(); ++j) {
+        if (!((mask >> j) & 1) || maxComponent(perLobe[j]) <= 0.f) continue;
+        const int n = 4000;
+        std::array<int, 4> count{};
+        int outside = 0, failed = 0;
+        for (int i = 0; i < n; ++i) {
+            Vec3 w;
+            if (!cl.samplePolygon(q, j, whole.data(), 4, rng.next2(), uint64_t(i) * 0x9E3779B97F4A7C15ULL + 1, w)) {
+                ++failed;
+                continue;
+            }
+            int hit = -1;
+            for (int k = 0; k < 4 && hit < 0; ++k)
+                if (inside(w, sub[k])) hit = k;
+            if (hit < 0) ++outside;
+            else ++count[hit];
+        }
+        EXPECT_EQ(failed, 0) << "lobe " << j;
+        EXPECT_LE(outside, n / 500) << "lobe " << j << ": polygon samples outside the light";
+        double total = 0, chi2 = 0;
+        for (int k = 0; k < 4; ++k) total += luminance(subLobe[k][j]);
+        int used = n - failed - outside;
+        for (int k = 0; k < 4; ++k) {
+            double e = luminance(subLobe[k][j]) / total * used;
+            if (e > 0) chi2 += (count[k] - e) * (count[k] - e) / e;
+        }
+        EXPECT_LT(chi2, 25.0) << "lobe " << j << ": polygon samples do not follow the lobe's polygon integral (3 dof)";
+    }
+}
+
 // Energy ≤ 1 and, where the model is reciprocal, reciprocity, for one view.
 void checkReciprocityAndEnergy(const Case& c) {
     Shaded s;
@@ -611,6 +685,10 @@ TEST_P(LobeConformance, Conforms) {
         {
             SCOPED_TRACE("reciprocity / energy");
             checkReciprocityAndEnergy(c);
+        }
+        {
+            SCOPED_TRACE("polygon queries");
+            checkPolygonQueries(c);
         }
     }
 }

@@ -210,10 +210,24 @@ TEST(LtcDistribution, DensityIntegratesToOneAndSamplingFollowsIt) {
     EXPECT_NEAR(f, p, 5 * sigma);
 }
 
+Ltc sharpLtc() {
+    // A very glossy GGX-like lobe (α ≈ 0.01 at normal view): lights away from the peak become thin crescents near the
+    // horizon of cosine space, where the disk-projection rejection would almost never hit (the spherical-triangle path).
+    Ltc l;
+    Mat3 m(1.f);
+    m[0][0] = 80.f, m[1][1] = 80.f, m[2][0] = -3.f;
+    l.invM = m;
+    return l;
+}
+
 TEST(LtcDistribution, PolygonSamplingIsProportionalToTheLtcOverThePolygon) {
     // Sub-quads of a light: the share of samplePolygon's directions in each equals its share of ∫_P D (χ² test).
-    const Ltc l = shearedLtc();
-    for (Vec3 c : {Vec3(0.3f, -0.2f, 1.f), Vec3(1.2f, 0.4f, 0.15f)}) {  // overhead, and straddling the horizon
+    // Overhead and straddling the horizon (the sheared lobe); near the peak and off it (the sharp lobe: the polygon
+    // in cosine space contains the zenith, or is a thin crescent at the horizon).
+    const std::pair<int, Vec3> configs[] = {{0, Vec3(0.3f, -0.2f, 1.f)}, {0, Vec3(1.2f, 0.4f, 0.15f)},
+                                            {1, Vec3(0.3f, -0.2f, 1.f)}, {1, Vec3(0.6f, 0.5f, 1.f)}};
+    for (const auto& [lobe, c] : configs) {
+        const Ltc l = lobe == 0 ? shearedLtc() : sharpLtc();
         const Vec3 a(0.5f, 0.1f, 0.f), b(0.f, 0.4f, 0.2f);
         auto q = quadFacingOrigin(c, a, b);
         double total = integrate(l, q.data(), 4, false, Horizon::Clip, nullptr);
