@@ -21,4 +21,40 @@ Color3 fresnelScale(const Fresnel& f, const Ltc& l);
 // ∫_P f·cos of a GGX-family lobe described by 'l' and 'f' (tint applied by the caller), and its polygon sampling.
 Color3 integrateGgx(const Ltc& l, const Fresnel& f, const Vec3* vertices, int n, uint8_t horizon);
 
+// Base of the GGX-family lobes (bsdf.ggx, bsdf.ggx_filtered, bsdf.beckmann_lean): their quad-light answers from the
+// LTC that Derived::computePolygonLtc(wo) gives, times polygonTint() · fresnelScale(polygonFresnel()); the polygon
+// sample is ∝ the same LTC (the integrand up to that constant). The LTC is memoised per wo: a path vertex asks the
+// integral and the shadow sample of every light with one wo (lobes belong to one thread's shading point).
+template <class Derived>
+class GgxPolygonLobe : public BsdfLobe {
+public:
+    bool integratePolygon(const LobeQuery& q, const Vec3* vertices, int count, Color3& result) const override {
+        const Derived& d = static_cast<const Derived&>(*this);
+        result = q.wo.z > 0.f ? d.polygonTint() * integrateGgx(polygonLtc(q.wo), d.polygonFresnel(), vertices, count,
+                                                               q.polygonHorizon)
+                              : Color3(0.f);
+        return true;
+    }
+    bool samplePolygon(const LobeQuery& q, const Vec3* vertices, int count, const Vec2& u, uint64_t seed,
+                       Vec3& wi) const override {
+        return q.wo.z > 0.f && ltc::samplePolygon(polygonLtc(q.wo), vertices, count, u, seed, wi);
+    }
+    const Ltc& polygonLtc(const Vec3& wo) const {
+        if (!(memoValid_ && wo == memoWo_)) {
+            memo_ = static_cast<const Derived&>(*this).computePolygonLtc(wo);
+            memoWo_ = wo;
+            memoValid_ = true;
+        }
+        return memo_;
+    }
+
+protected:
+    void invalidatePolygonLtc() { memoValid_ = false; }
+
+private:
+    mutable Ltc memo_;
+    mutable Vec3 memoWo_{0.f};
+    mutable bool memoValid_ = false;
+};
+
 }  // namespace specula::ltc

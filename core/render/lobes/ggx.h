@@ -63,7 +63,7 @@ constexpr float kMinAlpha = 1e-4f;
 
 }  // namespace ggx
 
-class GgxLobe final : public BsdfLobe {
+class GgxLobe final : public ltc::GgxPolygonLobe<GgxLobe> {
 public:
     GgxLobe(float alphaX, float alphaY, const Fresnel& fresnel, const Color3& tint = Color3(1.f))
         : ax_(std::max(alphaX, ggx::kMinAlpha)), ay_(std::max(alphaY, ggx::kMinAlpha)), fresnel_(fresnel), tint_(tint) {}
@@ -101,26 +101,13 @@ public:
     const char* modelName() const override { return "ggx"; }
     void parameters(const LobeQuery&, LobeParameters& out) const override { out.push_back({"alpha", {ax_, ay_}}); }
 
-    // Quad lights: the fitted LTC of this GGX lobe (HDHN16; isotropic 64×64 table, anisotropic t-EM table) with
-    // Fresnel F0·mag + (1 − F0)·fres; the polygon sample is ∝ the same LTC (the integrand up to a constant).
-    bool integratePolygon(const LobeQuery& q, const Vec3* vertices, int count, Color3& result) const override {
-        result = q.wo.z > 0.f ? tint_ * ltc::integrateGgx(polygonLtc(q.wo), fresnel_, vertices, count, q.polygonHorizon)
-                              : Color3(0.f);
-        return true;
+    // Quad lights (ltc::GgxPolygonLobe): the fitted LTC of this GGX lobe (HDHN16; isotropic 64×64 table, anisotropic
+    // t-EM table) with Fresnel F0·mag + (1 − F0)·fres.
+    ltc::Ltc computePolygonLtc(const Vec3& wo) const {
+        return ltc::ggxRoughnessMatrix(ltc::builtinTables(), double(ax_) * ax_, 0.0, double(ay_) * ay_, wo);
     }
-    bool samplePolygon(const LobeQuery& q, const Vec3* vertices, int count, const Vec2& u, uint64_t seed,
-                       Vec3& wi) const override {
-        return q.wo.z > 0.f && ltc::samplePolygon(polygonLtc(q.wo), vertices, count, u, seed, wi);
-    }
-    // The LTC for wo, cached: a path vertex asks the integral and the shadow sample of every light with one wo.
-    ltc::Ltc polygonLtc(const Vec3& wo) const {
-        if (!(ltcValid_ && wo == ltcWo_)) {
-            ltc_ = ltc::ggxRoughnessMatrix(ltc::builtinTables(), double(ax_) * ax_, 0.0, double(ay_) * ay_, wo);
-            ltcWo_ = wo;
-            ltcValid_ = true;
-        }
-        return ltc_;
-    }
+    const Fresnel& polygonFresnel() const { return fresnel_; }
+    Color3 polygonTint() const { return tint_; }
 
     float alphaX() const { return ax_; }
     float alphaY() const { return ay_; }
@@ -129,9 +116,6 @@ private:
     float ax_, ay_;
     Fresnel fresnel_;
     Color3 tint_;
-    mutable ltc::Ltc ltc_;  // lobes belong to one thread's shading point (ScratchArena)
-    mutable Vec3 ltcWo_{0.f};
-    mutable bool ltcValid_ = false;
 };
 
 }  // namespace specula

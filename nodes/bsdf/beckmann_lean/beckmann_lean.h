@@ -118,7 +118,7 @@ inline float evalNoFresnel(const SlopeGaussian& g, const Vec3& wo, const Vec3& w
 
 namespace specula {
 
-class BeckmannLeanLobe final : public BsdfLobe {
+class BeckmannLeanLobe final : public ltc::GgxPolygonLobe<BeckmannLeanLobe> {
 public:
     BeckmannLeanLobe(const lean::SlopeGaussian& g, const Fresnel& fresnel) : g_(g), fresnel_(fresnel) {}
     LobeKind kind() const override { return LobeKind::Specular; }
@@ -164,22 +164,12 @@ public:
         out.push_back({"mean_slope", {g_.mean.x, g_.mean.y}});
         out.push_back({"slope_covariance", {g_.a, g_.b, g_.c}});  // (var_x, var_y, cov_xy)
     }
-    // Quad lights through an equivalent GGX (docs/ltc-tables.md): the frame tilted to the mean normal
-    // n' = normalize(−μx, −μy, 1) and a GGX roughness matrix proportional to the slope covariance Σ (kept as is under
-    // the tilt; Beckmann α² = 2σ² per axis). The error against the lobe is measured in test_ltc_lobes.
-    bool integratePolygon(const LobeQuery& q, const Vec3* vertices, int count, Color3& result) const override {
-        result = q.wo.z > 0.f ? ltc::integrateGgx(polygonLtc(q.wo), fresnel_, vertices, count, q.polygonHorizon)
-                              : Color3(0.f);
-        return true;
-    }
-    bool samplePolygon(const LobeQuery& q, const Vec3* vertices, int count, const Vec2& u, uint64_t seed,
-                       Vec3& wi) const override {
-        return q.wo.z > 0.f && ltc::samplePolygon(polygonLtc(q.wo), vertices, count, u, seed, wi);
-    }
-    ltc::Ltc polygonLtc(const Vec3& wo) const {  // cached per wo, as GgxLobe::polygonLtc
-        if (ltcValid_ && wo == ltcWo_) return ltc_;
-        ltcWo_ = wo;
-        ltcValid_ = true;
+    // Quad lights (ltc::GgxPolygonLobe) through an equivalent GGX (docs/ltc-tables.md): the frame tilted to the mean
+    // normal n' = normalize(−μx, −μy, 1) and a GGX roughness matrix proportional to the slope covariance Σ (kept as is
+    // under the tilt; Beckmann α² = 2σ² per axis). The error against the lobe is measured in test_ltc_lobes.
+    const Fresnel& polygonFresnel() const { return fresnel_; }
+    Color3 polygonTint() const { return Color3(1.f); }
+    ltc::Ltc computePolygonLtc(const Vec3& wo) const {
         const Vec3 n = glm::normalize(Vec3(-g_.mean.x, -g_.mean.y, 1.f));
         const Vec3 t = glm::normalize(Vec3(1.f, 0.f, 0.f) - n * n.x);
         const Mat3 tilt = glm::transpose(Mat3(t, glm::cross(n, t), n));  // rows t, b, n: lobe frame -> tilted frame
@@ -189,16 +179,13 @@ public:
         ltc::Ltc l = ltc::ggxRoughnessMatrix(ltc::builtinTables(), kEquivalentScale * g_.a, kEquivalentScale * g_.c,
                                              kEquivalentScale * g_.b, tilt * wo);
         l.invM = l.invM * tilt;
-        return ltc_ = l;
+        return l;
     }
     const lean::SlopeGaussian& gaussian() const { return g_; }
 
 private:
     lean::SlopeGaussian g_;
     Fresnel fresnel_;
-    mutable ltc::Ltc ltc_;
-    mutable Vec3 ltcWo_{0.f};
-    mutable bool ltcValid_ = false;
 };
 
 }  // namespace specula

@@ -308,7 +308,7 @@ struct LobeSetup {
 // configuration h = n with a directional light) and pdf() returns exactly the density of that sampling: the
 // estimator stays unbiased under MIS for any Ā(wo, wi) (support is the whole hemisphere). Normal-based filters
 // and `none` give Ā independent of wi, so there Ā_s = Ā and sampling is the lobe's exact VNDF.
-class FilteredGgxLobe final : public BsdfLobe {
+class FilteredGgxLobe final : public ltc::GgxPolygonLobe<FilteredGgxLobe> {
 public:
     FilteredGgxLobe(const LobeSetup& s, const Fresnel& fresnel, const Color3& tint = Color3(1.f))
         : s_(s), fresnel_(fresnel), tint_(tint) {
@@ -384,26 +384,14 @@ public:
         out.push_back({"filtered_alpha", {std::sqrt(Ab.a), std::sqrt(Ab.d)}});
     }
 
-    // Quad lights: the LTC of GGX with the sampling matrix Ā_s (for normal-based filters and `none` the exact filtered
-    // matrix; for half-vector filters the filter at the mirror configuration, which is what the lobe samples), via
-    // its principal axes in the anisotropic table (ltc::ggxRoughnessMatrix).
-    bool integratePolygon(const LobeQuery& q, const Vec3* vertices, int count, Color3& result) const override {
-        result = q.wo.z > 0.f ? tint_ * ltc::integrateGgx(polygonLtc(q.wo), fresnel_, vertices, count, q.polygonHorizon)
-                              : Color3(0.f);
-        return true;
+    // Quad lights (ltc::GgxPolygonLobe): the LTC of GGX with the sampling matrix Ā_s (for normal-based filters and
+    // `none` the exact filtered matrix; for half-vector filters the filter at the mirror configuration, which is what
+    // the lobe samples), via its principal axes in the anisotropic table (ltc::ggxRoughnessMatrix).
+    ltc::Ltc computePolygonLtc(const Vec3& wo) const {
+        return ltc::ggxRoughnessMatrix(ltc::builtinTables(), sampling_.a, sampling_.c, sampling_.d, wo);
     }
-    bool samplePolygon(const LobeQuery& q, const Vec3* vertices, int count, const Vec2& u, uint64_t seed,
-                       Vec3& wi) const override {
-        return q.wo.z > 0.f && ltc::samplePolygon(polygonLtc(q.wo), vertices, count, u, seed, wi);
-    }
-    ltc::Ltc polygonLtc(const Vec3& wo) const {  // cached per wo, as GgxLobe::polygonLtc
-        if (!(ltcValid_ && wo == ltcWo_)) {
-            ltc_ = ltc::ggxRoughnessMatrix(ltc::builtinTables(), sampling_.a, sampling_.c, sampling_.d, wo);
-            ltcWo_ = wo;
-            ltcValid_ = true;
-        }
-        return ltc_;
-    }
+    const Fresnel& polygonFresnel() const { return fresnel_; }
+    Color3 polygonTint() const { return tint_; }
 
     const Sym2& unfiltered() const { return s_.A; }
     const Sym2& samplingMatrix() const { return sampling_; }
@@ -414,7 +402,7 @@ public:
         D3 wi(-wo.x, -wo.y, wo.z);
         sampling_ = filtered(wo, wi, 0.0, false);
         samplingL_ = cholesky(sampling_);
-        ltcValid_ = false;
+        invalidatePolygonLtc();
     }
 
 private:
@@ -428,9 +416,6 @@ private:
     bool halfVector_ = false;
     Sym2 fixed_, sampling_;
     Chol2 samplingL_;
-    mutable ltc::Ltc ltc_;
-    mutable Vec3 ltcWo_{0.f};
-    mutable bool ltcValid_ = false;
 };
 
 }  // namespace specula::fggx
