@@ -172,7 +172,7 @@ void spc_ltc_ggx_anisotropic(sampler2D ltc_anisotropic, float alphaX, float alph
     int np = size.y / n;
     float sx = wo.x < 0.0 ? -1.0 : 1.0, sy = wo.y < 0.0 ? -1.0 : 1.0;
     float cosTheta = clamp(wo.z, 0.0, 1.0);
-    float phi = atan(abs(wo.y), abs(wo.x));
+    float phi = spc_ltc_angle(abs(wo.y), abs(wo.x));  // atan2, accurate (see spc_ltc_angle)
     float c[4];
     c[0] = sqrt(clamp(alphaX, 0.0, 1.0)) * float(n - 1);
     c[1] = sqrt(clamp(alphaY, 0.0, 1.0)) * float(n - 1);
@@ -217,7 +217,10 @@ void spc_ltc_ggx_matrix(sampler2D ltc_matrix, sampler2D ltc_amplitude, sampler2D
                         out mat3 invM, out vec2 magFres) {
     float a = A.x, c = A.y, d = A.z;
     float h = 0.5 * (a + d), g = sqrt(max(0.0, 0.25 * (a - d) * (a - d) + c * c));
-    float ax = sqrt(max(h + g, 0.0)), ay = sqrt(max(h - g, 0.0));
+    // λ2 = det A / λ1 rather than h − g: in float the difference cancels for strongly anisotropic A (relative error
+    // ~1e-7·λ1/λ2), the quotient does not (the CPU subtracts in double).
+    float l1 = max(h + g, 0.0);
+    float ax = sqrt(l1), ay = l1 > 0.0 ? sqrt(max(a * d - c * c, 0.0) / l1) : 0.0;
     if (abs(ax - ay) <= 1e-4 * ax) {
         spc_ltc_ggx_isotropic(ltc_matrix, ltc_amplitude, 0.5 * (ax + ay), wo, invM, magFres);
         return;
@@ -226,8 +229,18 @@ void spc_ltc_ggx_matrix(sampler2D ltc_matrix, sampler2D ltc_amplitude, sampler2D
         spc_ltc_ggx_anisotropic(ltc_anisotropic, sqrt(max(a, 0.0)), sqrt(max(d, 0.0)), wo, invM, magFres);
         return;
     }
-    float phi = 0.5 * atan(2.0 * c, a - d);
-    float cs = cos(phi), sn = sin(phi);
+    // (cos φ0, sin φ0) for φ0 = ½ atan2(2c, a − d) in (−π/2, π/2] without trigonometry (whose GL implementations
+    // carry ~1e-6 errors): cos 2φ0 = (a − d)/2g, sin 2φ0 = c/g and the half-angle formulas, each branch on the side
+    // where it does not cancel.
+    float c2 = 0.5 * (a - d) / g, s2 = c / g;
+    float cs, sn;
+    if (c2 >= 0.0) {
+        cs = sqrt(0.5 * (1.0 + c2));
+        sn = s2 / (2.0 * cs);
+    } else {
+        sn = (c < 0.0 ? -1.0 : 1.0) * sqrt(0.5 * (1.0 - c2));
+        cs = s2 / (2.0 * sn);
+    }
     mat3 R = mat3(1.0);  // rows (cs, sn, 0), (−sn, cs, 0), (0, 0, 1): lobe frame -> principal frame
     R[0][0] = cs;
     R[1][0] = sn;
