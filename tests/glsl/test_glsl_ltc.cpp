@@ -29,6 +29,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <random>
+#include <set>
 
 using namespace specula;
 using namespace specula::graph;
@@ -435,7 +436,7 @@ void main() {
 
 struct ModuleResult {
     float maxErr = 0.f;
-    int nonZero = 0, partial = 0;
+    int nonZero = 0, partial = 0, resources = 0;
 };
 
 // Emits 'mj', binds its uniform block and every resource from its manifest alone, answers kSamples polygon queries
@@ -445,9 +446,20 @@ ModuleResult runModule(const json& mj, std::string* failure) {
     ModuleResult res;
     GraphDesc g = parseGraph(mj, "/materials/m");
     codegen::GlslModule mod = codegen::emitGlsl(g);
+    // The library once, and each built-in table once however many nodes read it.
+    size_t libs = 0;
+    for (size_t p = mod.source.find("#define SPC_LIBRARY_SHARED_LTC_GLSL"); p != std::string::npos;
+         p = mod.source.find("#define SPC_LIBRARY_SHARED_LTC_GLSL", p + 1))
+        ++libs;
+    if (libs != 1) *failure = "shared/ltc.glsl emitted " + std::to_string(libs) + " times";
+    std::set<std::string> tables;
+    for (const codegen::GlslResource& r : mod.resources)
+        if (r.kind == ResourceSpec::Kind::BuiltinTable && !tables.insert(r.resource).second)
+            *failure = "built-in table '" + r.resource + "' bound twice";
     GraphLoadContext load{};
     std::vector<ResourceImage> images = codegen::exportGlslResources(g, mod, load);
     json manifest = codegen::glslManifest(mod, images, {});
+    res.resources = int(manifest["resources"].size());
     auto mat = loadGraphMaterial(mj, "/materials/m", load);
     std::string log;
     unsigned prog = glsltest::glProgram(mod.source + moduleMain(mod.entryPrefix), &log);
@@ -545,6 +557,7 @@ TEST(GlslLtcModule, MixOfDiffuseAndGgxAnswersPolygonQueries) {
     std::string failure;
     ModuleResult r = runModule(mj, &failure);
     ASSERT_TRUE(failure.empty()) << failure;
+    EXPECT_EQ(r.resources, 3);  // ltc_matrix, ltc_amplitude (diffuse and ggx), ltc_anisotropic
     double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     std::printf("LTC PARITY module diffuse+ggx mix  max_rel_err %.3g  (non-zero channels %d, %.2f s)\n", r.maxErr, r.nonZero, secs);
     EXPECT_EQ(r.partial, 0);
