@@ -6,6 +6,7 @@
 #include "nodes/shared/bsdf_ports.h"
 
 #include "core/graph/closure_util.h"
+#include "core/ltc/ltc_gpu.h"
 #include "nodes/bsdf/beckmann_lean/beckmann_lean.h"
 
 namespace specula::nodes {
@@ -49,12 +50,16 @@ void reg(NodeRegistry& r) {
     s.id = "bsdf.beckmann_lean";
     s.category = "bsdf";
     s.doc = "Beckmann microfacet reflection with a LEAN slope Gaussian (Olano & Baker 2010): mean slope and covariance "
-            "(e.g. from texture.lean) plus the material roughness as (alpha^2/2) I; Smith G2 of the shifted Gaussian.";
+            "(e.g. from texture.lean) plus the material roughness as (alpha^2/2) I; Smith G2 of the shifted Gaussian. "
+            "Quad lights in closed form (polygon queries): the LTC of an equivalent GGX (tilted frame, alpha^2 = 1.5 Sigma).";
     s.inputs = kParams.ports();
     s.outputs = kOutputs.ports();
     s.cpu = &cpu;
     s.glslFunction = "spc_bsdf_beckmann_lean";
     s.glslFile = "bsdf/beckmann_lean/beckmann_lean.glsl";
+    s.glslLibraries = {"shared/ltc.glsl"};
+    // Polygon queries (LTC quad lights through the equivalent GGX): the GGX fits and the mag/fres/sphere table.
+    s.resources = {ltc::matrixResource(), ltc::amplitudeResource(), ltc::anisotropicResource()};
     r.add(std::move(s));
 }
 

@@ -2,6 +2,7 @@
 #include "nodes/node_common.h"
 
 #include "core/graph/closure_util.h"
+#include "core/ltc/ltc_gpu.h"
 #include "core/render/lobes/lambert.h"
 
 namespace specula::nodes {
@@ -27,12 +28,16 @@ void reg(NodeRegistry& r) {
     NodeSpec s;
     s.id = "bsdf.diffuse";
     s.category = "bsdf";
-    s.doc = "Lambertian diffuse reflection, f = color/π.";
+    s.doc = "Lambertian diffuse reflection, f = color/π. Quad lights in closed form (polygon queries): Lambert's form "
+            "factor (the LTC with M = I).";
     s.inputs = kParams.ports();
     s.outputs = kOutputs.ports();
     s.cpu = &cpu;
     s.glslFunction = "spc_bsdf_diffuse";
     s.glslFile = "bsdf/diffuse/diffuse.glsl";
+    s.glslLibraries = {"shared/ltc.glsl"};
+    // Polygon queries: the clip-free horizon reads the sphere channel of the shared LTC amplitude table.
+    s.resources = {ltc::amplitudeResource()};
     r.add(std::move(s));
 }
 

@@ -4,6 +4,7 @@
 #include "nodes/node_common.h"
 
 #include "core/graph/closure_util.h"
+#include "core/ltc/ltc_gpu.h"
 #include "core/render/lobes/ggx.h"
 #include "nodes/shared/bsdf_ports.h"
 
@@ -44,12 +45,16 @@ void reg(NodeRegistry& r) {
     NodeSpec s;
     s.id = "bsdf.ggx";
     s.category = "bsdf";
-    s.doc = "Anisotropic GGX reflection, height-correlated Smith masking-shadowing (Heitz 2014, Eq. 99), unfiltered.";
+    s.doc = "Anisotropic GGX reflection, height-correlated Smith masking-shadowing (Heitz 2014, Eq. 99), unfiltered. "
+            "Quad lights in closed form (polygon queries): its fitted LTC (HDHN16), Fresnel as F0·mag + (1 − F0)·fres.";
     s.inputs = kParams.ports();
     s.outputs = kOutputs.ports();
     s.cpu = &cpu;
     s.glslFunction = "spc_bsdf_ggx";
     s.glslFile = "bsdf/ggx/ggx.glsl";
+    s.glslLibraries = {"shared/ltc.glsl"};
+    // Polygon queries (LTC quad lights): the isotropic and anisotropic GGX fits and the mag/fres/sphere table.
+    s.resources = {ltc::matrixResource(), ltc::amplitudeResource(), ltc::anisotropicResource()};
     r.add(std::move(s));
 }
 

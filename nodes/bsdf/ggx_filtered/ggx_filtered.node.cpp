@@ -6,6 +6,7 @@
 #include "nodes/node_common.h"
 
 #include "core/graph/closure_util.h"
+#include "core/ltc/ltc_gpu.h"
 #include "core/render/shading.h"
 #include "nodes/bsdf/ggx_filtered/filtered_ggx.h"
 
@@ -132,13 +133,17 @@ void reg(NodeRegistry& r) {
     s.id = "bsdf.ggx_filtered";
     s.category = "bsdf";
     s.doc = "GGX reflection with NDF filtering for specular anti-aliasing (Tokuyoshi & Kaplanyan 2021): roughness matrix, "
-            "height-correlated Smith G2, slope-space (K16), projected-space exact/approximate and isotropic filters.";
+            "height-correlated Smith G2, slope-space (K16), projected-space exact/approximate and isotropic filters. "
+            "Quad lights in closed form (polygon queries): the LTC of its sampling matrix.";
     s.inputs = kParams.ports();
     s.outputs = kOutputs.ports();
     s.flags = kNeedsDerivatives;
     s.cpu = &cpu;
     s.glslFunction = "spc_bsdf_ggx_filtered";
     s.glslFile = "bsdf/ggx_filtered/ggx_filtered.glsl";
+    s.glslLibraries = {"shared/ltc.glsl"};
+    // Polygon queries (LTC quad lights with the sampling matrix): the isotropic/anisotropic GGX fits, mag/fres/sphere.
+    s.resources = {ltc::matrixResource(), ltc::amplitudeResource(), ltc::anisotropicResource()};
     r.add(std::move(s));
 }
 
