@@ -160,6 +160,16 @@ GlslModule emitGlsl(const GraphDesc& g, const GlslOptions& opt) {
           << r.nodeType << ") resource '" << r.resource << "' (" << resourceKindName(r.kind) << ")"
           << (r.file.empty() ? "" : ": \"" + r.file + "\", colorspace " + r.colorspace) << "\n";
     if (!mod.resources.empty()) o << "\n";
+    // Shared libraries of the live nodes (NodeSpec::glslLibraries), each once, in first-use order over the sorted
+    // node files, before any node file calls into them (guarded too: modules may be concatenated).
+    {
+        std::set<std::string> seen;
+        for (auto& fileIds : files)
+            for (int n : live)
+                if (g.nodes[n].spec->glslFile == fileIds.first)
+                    for (const std::string& lib : g.nodes[n].spec->glslLibraries)
+                        if (seen.insert(lib).second) o << glslLibraryText(lib) << "\n";
+    }
     for (auto& [file, ids] : files) {
         std::string list;
         for (auto& id : ids) list += (list.empty() ? "" : ", ") + id;

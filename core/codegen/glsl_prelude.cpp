@@ -29,12 +29,16 @@ struct SpeculaShadingInputs {
 };
 
 // What a closure is asked (CPU: BsdfQuery), the first parameter of every BSDF function. kind DIRECTION: f·cos for the
-// pair (wo, wi); kind POLYGON: the integral of f·cos over the polygon polygon[0..vertex_count) (offsets from the
-// shading point, world space, counter-clockwise seen from it), for lobes with a closed form (the others set
-// SpeculaClosure.partial). light_distance: distance to a point light (filtered lobes differentiate wi with it);
-// +inf for directions.
+// pair (wo, wi); kind POLYGON: the integral of f·cos over the polygon polygon[0..vertex_count), unshadowed and without
+// the light's radiance (the host applies both), for lobes with a closed form (the LTC lobes: bsdf.diffuse, bsdf.ggx,
+// bsdf.ggx_filtered, bsdf.beckmann_lean; the others set SpeculaClosure.partial). light_distance: distance to a point
+// light (filtered lobes differentiate wi with it); +inf for directions. horizon (polygon queries): how the LTC lobes
+// treat a polygon crossing the horizon of their cosine space, SPC_HORIZON_CLIP (0) = exact clipping,
+// SPC_HORIZON_CLIPLESS (1) = the clip-free sphere approximation (CPU: BsdfQuery::polygonHorizon, render.ltc_horizon).
 const int SPC_QUERY_DIRECTION = 0;
 const int SPC_QUERY_POLYGON = 1;
+const int SPC_HORIZON_CLIP = 0;
+const int SPC_HORIZON_CLIPLESS = 1;
 struct SpeculaClosureQuery {
     int kind;
     vec3 wo;
@@ -42,6 +46,7 @@ struct SpeculaClosureQuery {
     float light_distance;
     vec3 polygon[4];
     int vertex_count;
+    int horizon;
 };
 SpeculaClosureQuery specula_direction_query(vec3 wo, vec3 wi, float light_distance) {
     SpeculaClosureQuery q;
@@ -51,7 +56,25 @@ SpeculaClosureQuery specula_direction_query(vec3 wo, vec3 wi, float light_distan
     q.light_distance = light_distance;
     for (int k = 0; k < 4; ++k) q.polygon[k] = vec3(0.0);
     q.vertex_count = 0;
+    q.horizon = SPC_HORIZON_CLIP;
     return q;
+}
+// A polygon query for a light polygon of count (3 or 4) vertices: wo = unit view direction (world space, away from
+// the surface); polygon = world-space offsets of the vertices from the shading point (any length), counter-clockwise
+// seen from the shading point. The lobes are one-sided (a polygon wound clockwise gives 0), so the host orients it:
+// a one-sided light is skipped for points behind it, a two-sided light has its winding reversed for them (CPU:
+// QuadLight::polygon in core/render/lights.cpp). horizon: SPC_HORIZON_CLIP or SPC_HORIZON_CLIPLESS. The answer's f
+// is the sum over the lobes of weight · ∫_P f·cos dω.
+SpeculaClosureQuery specula_polygon_query(vec3 wo, vec3 polygon[4], int count, int horizon) {
+    SpeculaClosureQuery q = specula_direction_query(wo, wo, 1.0 / 0.0);
+    q.kind = SPC_QUERY_POLYGON;
+    q.polygon = polygon;
+    q.vertex_count = clamp(count, 0, 4);
+    q.horizon = horizon;
+    return q;
+}
+SpeculaClosureQuery specula_polygon_query(vec3 wo, vec3 p0, vec3 p1, vec3 p2, vec3 p3, int count, int horizon) {
+    return specula_polygon_query(wo, vec3[4](p0, p1, p2, p3), count, horizon);
 }
 
 // A closure's answer to a query: f = BSDF times cos(theta_i) (or its polygon integral), emission = emitted

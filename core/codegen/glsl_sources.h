@@ -15,6 +15,12 @@ struct GlslSourceRegistrar {
     GlslSourceRegistrar(const char* relPath, const char* text);
 };
 
+// A shared GLSL library (NodeSpec::glslLibraries, a path relative to nodes/) wrapped in an include guard derived from
+// its path, so that several modules or nodes may each carry a copy; an #error line if it was not embedded.
+std::string glslLibraryText(const std::string& relPath);
+// The guarded libraries one node needs, in its listed order (what a test shader puts before the node's own file).
+std::string glslNodeLibraries(const std::vector<std::string>& relPaths);
+
 // The prelude every emitted module starts with: SpeculaShadingInputs, SpeculaClosure, frame and
 // Fresnel helpers shared by the node functions (core/codegen/glsl_prelude.cpp).
 const std::string& glslPrelude();

@@ -180,6 +180,9 @@ struct NodeSpec {
     PrepareFn prepare = nullptr;
     std::string glslFunction;  // GLSL function name (overloads allowed across typed variants)
     std::string glslFile;      // path of the .glsl relative to nodes/ (embedded into the binary)
+    // Shared GLSL files (paths relative to nodes/, e.g. "shared/ltc.glsl") that glslFile calls into: the emitter and
+    // the GLSL tests put each one once per module, include-guarded, before the node files (codegen::glslLibraryText).
+    std::vector<std::string> glslLibraries;
     float parityTolerance = 1e-4f;  // max relative error CPU vs GLSL (docs/nodes.md)
     std::string parityNote;         // why a looser tolerance is needed
 

@@ -27,7 +27,8 @@ std::string literalOf(const PortSpec& p) {
 
 // A fragment shader calling 'spec' once with its defaults.
 std::string nodeTestShader(const NodeSpec& spec) {
-    std::string src = "#version 450\n" + codegen::glslPrelude() + codegen::glslEnumConstants(spec) + *spec.glslSource() + "\n";
+    std::string src = "#version 450\n" + codegen::glslPrelude() + codegen::glslEnumConstants(spec) +
+                      codegen::glslNodeLibraries(spec.glslLibraries) + *spec.glslSource() + "\n";
     src += "layout(location = 0) out vec4 spc_out;\n";
     std::vector<std::string> resources;
     for (size_t r = 0; r < spec.resources.size(); ++r) {
@@ -74,7 +75,10 @@ TEST(GlslCompile, EveryEmbeddedFileBelongsToANode) {
     // A .glsl no NodeSpec refers to is dead code that would silently drift.
     for (const std::string& path : codegen::embeddedGlslPaths()) {
         bool used = false;
-        for (const NodeSpec* s : NodeRegistry::instance().all()) used |= s->glslFile == path;
+        for (const NodeSpec* s : NodeRegistry::instance().all()) {
+            used |= s->glslFile == path;
+            for (const std::string& lib : s->glslLibraries) used |= lib == path;  // a shared library (shared/ltc.glsl)
+        }
         EXPECT_TRUE(used) << path;
     }
 }

@@ -121,17 +121,27 @@ Layout layoutFor(const NodeSpec& s) {
 }
 
 std::string parityShader(const NodeSpec& s, const Layout& L) {
-    std::string src = "#version 450\n" + codegen::glslPrelude() + codegen::glslEnumConstants(s) + *s.glslSource() + "\n";
     bool closures = false;
     for (auto& p : s.inputs) closures |= p.type == TypeDesc::Closure;
     const NodeSpec* diffuse = NodeRegistry::instance().find("bsdf.diffuse");
+    // Libraries are guarded, so the node's and the closure source's may overlap.
+    std::string src = "#version 450\n" + codegen::glslPrelude() + codegen::glslEnumConstants(s) +
+                      codegen::glslNodeLibraries(s.glslLibraries) +
+                      (closures ? codegen::glslNodeLibraries(diffuse->glslLibraries) : std::string()) + *s.glslSource() + "\n";
     if (closures && s.glslFile != diffuse->glslFile) src += *diffuse->glslSource() + "\n";
-    // The node's resources at bindings 1, 2, ... (binding 0 holds the data), bound from their ResourceImages.
-    std::vector<std::string> resources;
+    // The node's resources at bindings 1, 2, ... (binding 0 holds the data), bound from their ResourceImages; then
+    // those of the bsdf.diffuse closure sources (parityClosureResources).
+    std::vector<std::string> resources, diffuseResources;
     for (size_t r = 0; r < s.resources.size(); ++r) {
         resources.push_back("spc_res" + std::to_string(r));
         src += "layout(binding = " + std::to_string(r + 1) + ") uniform " + s.resources[r].glslType + " " + resources.back() + ";\n";
     }
+    if (closures)
+        for (size_t r = 0; r < diffuse->resources.size(); ++r) {
+            diffuseResources.push_back("spc_dres" + std::to_string(r));
+            src += "layout(binding = " + std::to_string(s.resources.size() + r + 1) + ") uniform " +
+                   diffuse->resources[r].glslType + " " + diffuseResources.back() + ";\n";
+        }
     src += R"(layout(binding = 0) uniform sampler2D spc_data;
 layout(location = 0) out vec4 spc_out;
 float spc_in(int i) { return texelFetch(spc_data, ivec2(i >> 2, int(gl_FragCoord.y)), 0)[i & 3]; }
@@ -166,7 +176,7 @@ void main() {
                    glsltest::nodeCall(*diffuse, [&](int p) { return diffuse->inputs[size_t(p)].name == "color" ? color
                                                              : diffuse->inputs[size_t(p)].name == "normal" ? std::string("s.normal")
                                                                                                            : std::string("s.tangent.xyz"); },
-                                      {v}) + ";\n";
+                                      {v}, diffuseResources) + ";\n";
         }
     std::vector<std::string> outs;
     for (size_t k = 0; k < s.outputs.size(); ++k) {
@@ -263,6 +273,13 @@ ParityResult runParity(const NodeSpec& s, std::string* failure) {
     std::vector<glsltest::GlTexture> resourceTex;
     for (const graph::ResourceImage& img : codegen::nodeResourceImages(s, resourceStrings(s), std::vector<std::string>(s.inputs.size()), load))
         resourceTex.push_back(glsltest::glResourceTexture(img, s.resources[resourceTex.size()].glslType));
+    // The closure sources' (bsdf.diffuse) built-in tables after them, as parityShader declares them.
+    bool closureInputs = false;
+    for (auto& p : s.inputs) closureInputs |= p.type == TypeDesc::Closure;
+    if (closureInputs) {
+        const NodeSpec* diffuse = NodeRegistry::instance().find("bsdf.diffuse");
+        for (const graph::ResourceSpec& r : diffuse->resources) resourceTex.push_back(glsltest::glResourceTexture(r.produce(nullptr), r.glslType));
+    }
     std::vector<float> gpu = glsltest::glRun(prog, outW, kSamples, [&] {
         glActiveTexture(GL_TEXTURE0);
         glBindTexture(GL_TEXTURE_2D, dataTex);

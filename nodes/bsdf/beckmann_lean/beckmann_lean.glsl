@@ -23,13 +23,19 @@ float spc_lean_lambda(vec3 w, vec2 mean, float a, float b, float c) {
     }
     return max(ap / e - 1.0, 0.0);
 }
+// F(1) of the chosen Fresnel model: the F0 of the LTC Fresnel weighting (ltc::fresnelScale; 1 = no Fresnel).
+vec3 spc_lean_fresnel_f0(int fresnel, vec3 f0, float ior, vec3 eta, vec3 k) {
+    if (fresnel == SPC_FRESNEL_SCHLICK) return f0;
+    if (fresnel == SPC_FRESNEL_DIELECTRIC) return vec3(spc_fresnel_dielectric(1.0, ior));
+    if (fresnel == SPC_FRESNEL_CONDUCTOR)
+        return vec3(spc_fresnel_conductor(1.0, eta.x, k.x), spc_fresnel_conductor(1.0, eta.y, k.y), spc_fresnel_conductor(1.0, eta.z, k.z));
+    return vec3(1.0);
+}
+// Polygon queries (BeckmannLeanLobe::integratePolygon): the LTC of an equivalent GGX through shared/ltc.glsl.
 void spc_bsdf_beckmann_lean(SpeculaClosureQuery q, vec3 weight, float roughness, vec2 slope, vec3 covariance, int fresnel,
-                            vec3 f0, float ior, vec3 eta, vec3 k, vec3 normal, vec3 tangent, out SpeculaClosure bsdf) {
+                            vec3 f0, float ior, vec3 eta, vec3 k, vec3 normal, vec3 tangent, sampler2D ltc_matrix,
+                            sampler2D ltc_amplitude, sampler2D ltc_anisotropic, out SpeculaClosure bsdf) {
     bsdf = spc_closure_none();
-    if (q.kind != SPC_QUERY_DIRECTION) {  // no closed form over polygons: the host samples this lobe
-        bsdf.partial = true;
-        return;
-    }
     // makeSlopeGaussian: PSD projection of the LEAN covariance, plus α²/2 per axis (α = roughness², >= 1e-3).
     float xx = max(covariance.x, 0.0), yy = max(covariance.y, 0.0);
     float lim = sqrt(xx * yy);
@@ -38,6 +44,26 @@ void spc_bsdf_beckmann_lean(SpeculaClosureQuery q, vec3 weight, float roughness,
     float v = 0.5 * al * al;
     float a = xx + v, b = yy + v, c = xy;
     float det = a * b - c * c;
+    if (q.kind == SPC_QUERY_POLYGON) {
+        vec3 T, B, N;
+        spc_frame(normal, tangent, T, B, N);
+        vec3 lo = spc_to_local(q.wo, T, B, N);
+        if (lo.z <= 0.0) return;
+        // The equivalent GGX (BeckmannLeanLobe::polygonLtc, docs/ltc-tables.md): the frame tilted to the mean normal
+        // n' = normalize(−μx, −μy, 1), roughness matrix α² = 1.5 Σ (measured best against this lobe).
+        vec3 n = normalize(vec3(-slope.x, -slope.y, 1.0));
+        vec3 t = normalize(vec3(1.0, 0.0, 0.0) - n * n.x);
+        mat3 tilt = transpose(mat3(t, cross(n, t), n));  // rows t, b, n: lobe frame -> tilted frame
+        mat3 invM;
+        vec2 magFres;
+        spc_ltc_ggx_matrix(ltc_matrix, ltc_amplitude, ltc_anisotropic, 1.5 * vec3(a, c, b), tilt * lo, invM, magFres);
+        invM = invM * tilt;
+        vec3 p[4];
+        spc_ltc_local_polygon(q, T, B, N, p);
+        float e = spc_ltc_integrate(invM, p, q.vertex_count, q.horizon, ltc_amplitude);
+        bsdf.f = weight * (spc_ltc_fresnel_scale(spc_lean_fresnel_f0(fresnel, f0, ior, eta, k), magFres) * e);
+        return;
+    }
     vec3 o, i, h;
     if (!spc_reflection_local(q.wo, q.wi, normal, tangent, o, i, h)) return;
     if (h.z <= 0.0) return;

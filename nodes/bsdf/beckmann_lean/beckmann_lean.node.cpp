@@ -6,6 +6,7 @@
 #include "nodes/shared/bsdf_ports.h"
 
 #include "core/graph/closure_util.h"
+#include "core/ltc/ltc_gpu.h"
 #include "nodes/bsdf/beckmann_lean/beckmann_lean.h"
 
 namespace specula::nodes {
@@ -55,6 +56,9 @@ void reg(NodeRegistry& r) {
     s.cpu = &cpu;
     s.glslFunction = "spc_bsdf_beckmann_lean";
     s.glslFile = "bsdf/beckmann_lean/beckmann_lean.glsl";
+    s.glslLibraries = {"shared/ltc.glsl"};
+    // Polygon queries (LTC quad lights through the equivalent GGX): the GGX fits and the mag/fres/sphere table.
+    s.resources = {ltc::matrixResource(), ltc::amplitudeResource(), ltc::anisotropicResource()};
     r.add(std::move(s));
 }
 

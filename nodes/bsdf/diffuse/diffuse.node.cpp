@@ -2,6 +2,7 @@
 #include "nodes/node_common.h"
 
 #include "core/graph/closure_util.h"
+#include "core/ltc/ltc_gpu.h"
 #include "core/render/lobes/lambert.h"
 
 namespace specula::nodes {
@@ -33,6 +34,9 @@ void reg(NodeRegistry& r) {
     s.cpu = &cpu;
     s.glslFunction = "spc_bsdf_diffuse";
     s.glslFile = "bsdf/diffuse/diffuse.glsl";
+    s.glslLibraries = {"shared/ltc.glsl"};
+    // Polygon queries: the clip-free horizon reads the sphere channel of the shared LTC amplitude table.
+    s.resources = {ltc::amplitudeResource()};
     r.add(std::move(s));
 }
 

@@ -1,4 +1,5 @@
-// bsdf.ggx: f·cos = weight · F(wo·h) D(h) G2(wo, wi) / (4 wo.z), the GLSL twin of GgxLobe::eval.
+// bsdf.ggx: f·cos = weight · F(wo·h) D(h) G2(wo, wi) / (4 wo.z), the GLSL twin of GgxLobe::eval (and of
+// GgxLobe::integratePolygon for polygon queries).
 // D: anisotropic GGX (Walter et al. 2007, Eq. 33); Λ: Heitz 2014, Eq. 86; G2 = 1/(1 + Λo + Λi) (Eq. 99).
 float spc_ggx_ndf(vec3 h, float ax, float ay) {
     if (h.z <= 0.0) return 0.0;
@@ -13,16 +14,37 @@ float spc_ggx_lambda(vec3 w, float ax, float ay) {
     float a2tan2 = (px * px + py * py) / z2;
     return 0.5 * (-1.0 + sqrt(1.0 + a2tan2));
 }
+// F(1) of the chosen Fresnel model: the F0 of the LTC Fresnel weighting (ltc::fresnelScale; 1 = no Fresnel).
+vec3 spc_ggx_fresnel_f0(int fresnel, vec3 f0, float ior, vec3 eta, vec3 k) {
+    if (fresnel == SPC_FRESNEL_SCHLICK) return f0;
+    if (fresnel == SPC_FRESNEL_DIELECTRIC) return vec3(spc_fresnel_dielectric(1.0, ior));
+    if (fresnel == SPC_FRESNEL_CONDUCTOR)
+        return vec3(spc_fresnel_conductor(1.0, eta.x, k.x), spc_fresnel_conductor(1.0, eta.y, k.y), spc_fresnel_conductor(1.0, eta.z, k.z));
+    return vec3(1.0);
+}
+// Polygon queries (GgxLobe::integratePolygon): the fitted LTC of this lobe (isotropic 64×64 table, or the anisotropic
+// table for αx != αy; shared/ltc.glsl) times F0·mag + (1 − F0)·fres.
 void spc_bsdf_ggx(SpeculaClosureQuery q, vec3 weight, float roughness, float anisotropy, int fresnel, vec3 f0, float ior,
-                  vec3 eta, vec3 k, vec3 normal, vec3 tangent, out SpeculaClosure bsdf) {
+                  vec3 eta, vec3 k, vec3 normal, vec3 tangent, sampler2D ltc_matrix, sampler2D ltc_amplitude,
+                  sampler2D ltc_anisotropic, out SpeculaClosure bsdf) {
     bsdf = spc_closure_none();
-    if (q.kind != SPC_QUERY_DIRECTION) {  // no closed form over polygons: the host samples this lobe
-        bsdf.partial = true;
-        return;
-    }
     float alpha = roughness * roughness;
     float aspect = sqrt(max(1.0 - 0.9 * anisotropy, 0.0));
     float ax = max(alpha / aspect, 1e-4), ay = max(alpha * aspect, 1e-4);
+    if (q.kind == SPC_QUERY_POLYGON) {
+        vec3 T, B, N;
+        spc_frame(normal, tangent, T, B, N);
+        vec3 lo = spc_to_local(q.wo, T, B, N);
+        if (lo.z <= 0.0) return;
+        mat3 invM;
+        vec2 magFres;
+        spc_ltc_ggx_axes(ltc_matrix, ltc_amplitude, ltc_anisotropic, ax, ay, lo, invM, magFres);
+        vec3 p[4];
+        spc_ltc_local_polygon(q, T, B, N, p);
+        float e = spc_ltc_integrate(invM, p, q.vertex_count, q.horizon, ltc_amplitude);
+        bsdf.f = weight * (spc_ltc_fresnel_scale(spc_ggx_fresnel_f0(fresnel, f0, ior, eta, k), magFres) * e);
+        return;
+    }
     vec3 o, i, h;
     if (!spc_reflection_local(q.wo, q.wi, normal, tangent, o, i, h)) return;
     float d = spc_ggx_ndf(h, ax, ay);

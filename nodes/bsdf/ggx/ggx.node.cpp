@@ -4,6 +4,7 @@
 #include "nodes/node_common.h"
 
 #include "core/graph/closure_util.h"
+#include "core/ltc/ltc_gpu.h"
 #include "core/render/lobes/ggx.h"
 #include "nodes/shared/bsdf_ports.h"
 
@@ -50,6 +51,9 @@ void reg(NodeRegistry& r) {
     s.cpu = &cpu;
     s.glslFunction = "spc_bsdf_ggx";
     s.glslFile = "bsdf/ggx/ggx.glsl";
+    s.glslLibraries = {"shared/ltc.glsl"};
+    // Polygon queries (LTC quad lights): the isotropic and anisotropic GGX fits and the mag/fres/sphere table.
+    s.resources = {ltc::matrixResource(), ltc::amplitudeResource(), ltc::anisotropicResource()};
     r.add(std::move(s));
 }
 

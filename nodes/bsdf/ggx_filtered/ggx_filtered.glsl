@@ -107,15 +107,17 @@ vec3 spc_ggxf_filtered(vec3 A, vec3 o, vec3 i, int fmode, int kernel, float sigm
     return spc_ggxf_additive(A, du, dv, kernel, sigma2, kappa);
 }
 
+// Polygon queries (FilteredGgxLobe::integratePolygon): the LTC of GGX with the sampling matrix Ā_s, i.e. the filter
+// evaluated at the mirror configuration (h = n, directional light) with the analytic derivatives (for normal-based
+// filters and `none` the exact filtered matrix), through its principal axes in the anisotropic table
+// (spc_ltc_ggx_matrix), times F0·mag + (1 − F0)·fres with the Schlick F0. In quad-derivative mode dFdxFine(N) is
+// taken before the polygon branch returns: keep q.kind uniform over a 2×2 quad.
 void spc_bsdf_ggx_filtered(SpeculaClosureQuery q, SpeculaShadingInputs s, vec3 weight, vec2 alpha, vec3 covariance, int filter_,
                            int kernel, float sigma2, float kappa, int derivatives, float derivative_scale, vec3 f0, vec3 normal,
-                           vec3 tangent, vec3 dndx, vec3 dndy, out SpeculaClosure bsdf, out vec2 filtered_alpha) {
+                           vec3 tangent, vec3 dndx, vec3 dndy, sampler2D ltc_matrix, sampler2D ltc_amplitude,
+                           sampler2D ltc_anisotropic, out SpeculaClosure bsdf, out vec2 filtered_alpha) {
     bsdf = spc_closure_none();
     filtered_alpha = alpha;
-    if (q.kind != SPC_QUERY_DIRECTION) {  // no closed form over polygons: the host samples this lobe
-        bsdf.partial = true;
-        return;
-    }
     int fmode = filter_;
     // A = diag(α²) + 2Σ, Σ made positive semi-definite; τ = det A (A.4).
     vec2 a = clamp(alpha, vec2(1e-4), vec2(0.999));
@@ -146,11 +148,27 @@ void spc_bsdf_ggx_filtered(SpeculaClosureQuery q, SpeculaShadingInputs s, vec3 w
         dwi0 = -(dp0 - i * dot(i, dp0)) / q.light_distance;
         dwi1 = -(dp1 - i * dot(i, dp1)) / q.light_distance;
     }
-    // Debug output: Ā at the mirror configuration (h = n, directional light), analytic reading.
-    vec3 Am = (o.z > 0.0 || spc_ggxf_isotropic(fmode)) ? spc_ggxf_filtered(A, o, vec3(-o.x, -o.y, o.z), fmode, kernel, sigma2, kappa, false, dn0, dn1, dwo0, dwo1,
-                                            vec3(0.0), vec3(0.0))
-                        : A;
+    // The sampling matrix Ā_s (FilteredGgxLobe::setSamplingFromMirror): Ā at the mirror configuration (h = n,
+    // directional light) from the analytic derivatives, whose normal derivatives are the dndx/dndy inputs whatever the
+    // derivative source (the CPU lobe's Differentials); normal-based filters use the mode's normal derivatives.
+    // Also the debug output filtered_alpha.
+    bool isoFilter = spc_ggxf_isotropic(fmode);
+    vec3 dna0 = isoFilter ? dn0 : spc_to_local(dndx, T, B, N) * sc, dna1 = isoFilter ? dn1 : spc_to_local(dndy, T, B, N) * sc;
+    vec3 Am = (o.z > 0.0 || isoFilter) ? spc_ggxf_filtered(A, o, vec3(-o.x, -o.y, o.z), fmode, kernel, sigma2, kappa, false, dna0, dna1, dwo0, dwo1,
+                                                           vec3(0.0), vec3(0.0))
+                                       : A;
     filtered_alpha = sqrt(vec2(Am.x, Am.z));
+    if (q.kind == SPC_QUERY_POLYGON) {
+        if (o.z <= 0.0) return;
+        mat3 invM;
+        vec2 magFres;
+        spc_ltc_ggx_matrix(ltc_matrix, ltc_amplitude, ltc_anisotropic, Am, o, invM, magFres);
+        vec3 p[4];
+        spc_ltc_local_polygon(q, T, B, N, p);
+        float e = spc_ltc_integrate(invM, p, q.vertex_count, q.horizon, ltc_amplitude);
+        bsdf.f = weight * (spc_ltc_fresnel_scale(f0, magFres) * e);
+        return;
+    }
     // Quad derivatives are taken before any divergent return (dFdxFine needs the whole quad).
     vec3 Ab = spc_ggxf_filtered(A, o, i, fmode, kernel, sigma2, kappa, quad, dn0, dn1, dwo0, dwo1, dwi0, dwi1);
     if (o.z <= 0.0 || i.z <= 0.0) return;

@@ -6,6 +6,7 @@
 #include "nodes/node_common.h"
 
 #include "core/graph/closure_util.h"
+#include "core/ltc/ltc_gpu.h"
 #include "core/render/shading.h"
 #include "nodes/bsdf/ggx_filtered/filtered_ggx.h"
 
@@ -139,6 +140,9 @@ void reg(NodeRegistry& r) {
     s.cpu = &cpu;
     s.glslFunction = "spc_bsdf_ggx_filtered";
     s.glslFile = "bsdf/ggx_filtered/ggx_filtered.glsl";
+    s.glslLibraries = {"shared/ltc.glsl"};
+    // Polygon queries (LTC quad lights with the sampling matrix): the isotropic/anisotropic GGX fits, mag/fres/sphere.
+    s.resources = {ltc::matrixResource(), ltc::amplitudeResource(), ltc::anisotropicResource()};
     r.add(std::move(s));
 }
 
