@@ -302,7 +302,8 @@ const Limits kLimits[] = {
     {"bsdf.ggx", 1e-4f, 1e-4f},
     {"bsdf.ggx_filtered", 1e-4f, 1e-4f},
     {"bsdf.beckmann_lean", 1e-4f, 1e-4f},
-    {"bsdf.ltc_normal_map", 1.f, 1.f},  // MEASURING
+    // 16² generated map, footprints as in the direction parity test; measured 4.7e-4 (clip) / 2.8e-5 (clip-free).
+    {"bsdf.ltc_normal_map", 5e-4f, 5e-5f},
 };
 
 class GlslLtcParity : public ::testing::TestWithParam<int> {

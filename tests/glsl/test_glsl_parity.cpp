@@ -127,7 +127,7 @@ std::string parityShader(const NodeSpec& s, const Layout& L) {
     for (auto& p : s.inputs) closures |= p.type == TypeDesc::Closure;
     const NodeSpec* diffuse = NodeRegistry::instance().find("bsdf.diffuse");
     // Libraries are guarded, so the node's and the closure source's may overlap.
-    std::string src = "#version 450\n" + std::string(std::getenv("LNM_MANUAL") ? "#define SPC_LNM_MANUAL_TRILINEAR\n" : "") + codegen::glslPrelude() + codegen::glslEnumConstants(s) +
+    std::string src = "#version 450\n" + codegen::glslPrelude() + codegen::glslEnumConstants(s) +
                       codegen::glslNodeLibraries(s.glslLibraries) +
                       (closures ? codegen::glslNodeLibraries(diffuse->glslLibraries) : std::string()) + *s.glslSource() + "\n";
     if (closures && s.glslFile != diffuse->glslFile) src += *diffuse->glslSource() + "\n";
@@ -356,14 +356,6 @@ ParityResult runParity(const NodeSpec& s, std::string* failure) {
         for (int i = 0; i < L.outFloats; ++i) {
             float gv = gpu[size_t(j) * outW * 4 + i], cv = cpu[i];
             float err = std::abs(gv - cv) / std::max(std::abs(cv), kRelFloor);
-            if (std::getenv("SPC_PARITY_DEBUG") && err > 1e-4f) {  // DEBUG-TEMP
-                const float* dd = data[j].data();
-                std::printf("DBG j %d f %d cpu %g gpu %g err %g | uv %g %g dx %g %g dy %g %g sign %g wo %g %g %g\n", j, i, cv, gv, err,
-                            dd[L.inOffset[size_t(s.inputIndex("uv"))]], dd[L.inOffset[size_t(s.inputIndex("uv"))] + 1],
-                            dd[L.inOffset[size_t(s.inputIndex("duvdx"))]], dd[L.inOffset[size_t(s.inputIndex("duvdx"))] + 1],
-                            dd[L.inOffset[size_t(s.inputIndex("duvdy"))]], dd[L.inOffset[size_t(s.inputIndex("duvdy"))] + 1],
-                            dd[L.inOffset[size_t(s.inputIndex("sign"))]], dd[kGeom], dd[kGeom + 1], dd[kGeom + 2]);
-            }
             if (!(err <= res.maxErr)) {  // also catches NaN
                 res.maxErr = std::isnan(err) ? 1e30f : err;
                 res.worstSample = j, res.worstFloat = i, res.worstCpu = cv, res.worstGpu = gv;

@@ -44,36 +44,10 @@ vec4 spc_lnm_theta_scales(sampler2D ltc_amplitude, float alpha, float theta) {
     return sc;
 }
 
-// One layer of 'tables' at (uv, lod): GL's trilinear filter (GL_LINEAR_MIPMAP_LINEAR, REPEAT), or with
-// SPC_LNM_MANUAL_TRILINEAR the same filter written out with texelFetch in the CPU's operations (lookupLevel).
+// One layer of 'tables' at (uv, lod): GL's trilinear filter (GL_LINEAR_MIPMAP_LINEAR, REPEAT), which is the CPU's
+// bilinear-per-level and linear-between-levels filter with texel centres at (i + 1/2)/n (lookupLevel).
 vec4 spc_lnm_fetch(sampler2DArray tables, vec2 uv, float lod, int layer) {
-#ifdef SPC_LNM_MANUAL_TRILINEAR
-    int maxg = textureQueryLevels(tables) - 1;
-    float l = clamp(lod, 0.0, float(maxg));
-    int g0 = int(floor(l));
-    float f = g0 < maxg ? l - float(g0) : 0.0;
-    vec4 r = vec4(0.0);
-    for (int pass = 0; pass < 2; ++pass) {
-        float wl = pass == 0 ? 1.0 - f : f;
-        if (wl <= 0.0) continue;
-        int g = g0 + pass;
-        int n = textureSize(tables, g).x;
-        float sx = uv.x * float(n) - 0.5, sy = uv.y * float(n) - 0.5;
-        float fx0 = floor(sx), fy0 = floor(sy);
-        float ax = sx - fx0, ay = sy - fy0;
-        int ix = int(fx0), iy = int(fy0);
-        for (int c = 0; c < 4; ++c) {
-            int dx = c & 1, dy = c >> 1;
-            float w = wl * (dx != 0 ? ax : 1.0 - ax) * (dy != 0 ? ay : 1.0 - ay);
-            if (w == 0.0) continue;
-            int x = (((ix + dx) % n) + n) % n, y = (((iy + dy) % n) + n) % n;
-            r += w * texelFetch(tables, ivec3(x, y, layer), g);
-        }
-    }
-    return r;
-#else
     return textureLod(tables, vec3(uv, float(layer)), lod);
-#endif
 }
 
 // Adds w·(mag·inv(M), mag, fres) of the stored LTCs of one lobe at (uv, lod), interpolated over the 2×2 nearest
@@ -134,7 +108,9 @@ void spc_lnm_lookup(sampler2DArray tables, sampler2D normals, sampler2D ltc_matr
     int size = textureSize(normals, 0).x;
     if (!(wo.z > 0.0) || size < 1) return;
     int levels = findMSB(size);
-    float theta = acos(min(wo.z, 1.0));
+    // θ by the two-argument atan, not acos(wo.z): with acos the parity on llvmpipe was 2.2e-3 (its acos is a coarse
+    // polynomial), with atan 2.6e-5.
+    float theta = atan(length(wo.xy), wo.z);
     float phi = (wo.x == 0.0 && wo.y == 0.0) ? 0.0 : atan(wo.y, wo.x);  // atan(0, 0) is undefined in GLSL
     if (phi < 0.0) phi += SPC_LNM_TWO_PI;
     if (any(isinf(uv)) || any(isnan(uv))) uv = vec2(0.0);
@@ -170,7 +146,7 @@ void spc_lnm_lookup(sampler2DArray tables, sampler2D normals, sampler2D ltc_matr
             int dx = c & 1, dy = c >> 1;
             float w = wl * (dx != 0 ? ax : 1.0 - ax) * (dy != 0 ? ay : 1.0 - ay);
             if (w == 0.0) continue;
-            int x = (((ix + dx) % size) + size) % size, y = (((iy + dy) % size) + size) % size;
+            int x = (ix + dx) & (size - 1), y = (iy + dy) & (size - 1);  // repeat; GLSL's % is undefined below 0
             vec3 n = texelFetch(normals, ivec2(x, y), 0).xyz;
             mat3 Rt = transpose(spc_lnm_texel_rotation(n));
             vec3 woT = Rt * wo;
