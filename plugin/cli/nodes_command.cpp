@@ -348,6 +348,12 @@ std::string nodeMarkdown(const NodeSpec& s) {
         for (auto& p : s.outputs) m += row({code(cell(p.name)), typeName(p.type), cell(p.doc)});
         m += "\n";
     }
+    if (!s.resources.empty()) {  // the GPU resources of the GLSL function (the manifest lists them per instance)
+        m += "| resource | GLSL type | kind | doc |\n|---|---|---|---|\n";
+        for (auto& r : s.resources)
+            m += row({code(cell(r.name)), code(cell(r.glslType)), resourceKindName(r.kind), cell(r.doc)});
+        m += "\n";
+    }
     return m;
 }
 
