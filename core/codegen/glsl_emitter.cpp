@@ -80,12 +80,32 @@ GlslModule emitGlsl(const GraphDesc& g, const GlslOptions& opt) {
     uint32_t offset = 0;
     std::map<std::pair<int, int>, std::string> uniformOf, resourceOf;
     int nextBinding = opt.bindingBase + 1;
+    // Built-in tables hold the same texels for every node instance (the LTC fits, the glint dictionary): one uniform
+    // per table and module, shared by all its users (a diffuse + GGX mix binds the LTC amplitude table once), which
+    // keeps modules within the sampler limits. Keyed by the texel producer and the GLSL type.
+    std::vector<std::pair<std::pair<ResourceImage (*)(const void*), std::string>, std::string>> sharedTables;
     for (int n : live) {
         const NodeInstance& ni = g.nodes[n];
         for (size_t r = 0; r < ni.spec->resources.size(); ++r) {
             const ResourceSpec& rs = ni.spec->resources[r];
+            const bool shared = rs.kind == ResourceSpec::Kind::BuiltinTable && rs.produce;
+            if (shared) {
+                auto it = std::find_if(sharedTables.begin(), sharedTables.end(), [&](const auto& e) {
+                    return e.first.first == rs.produce && e.first.second == rs.glslType;
+                });
+                if (it != sharedTables.end()) {
+                    resourceOf[{n, int(r)}] = it->second;
+                    continue;
+                }
+            }
             GlslResource res;
-            res.name = "spc_" + px + "res_" + stem[n] + "_" + rs.name;
+            // Shared tables are named by the resource ("table_" cannot clash with a node stem's "res_" names).
+            res.name = shared ? "spc_" + px + "table_" + glslIdentifier(rs.name) : "spc_" + px + "res_" + stem[n] + "_" + rs.name;
+            if (shared) {
+                for (int k = 2; std::any_of(sharedTables.begin(), sharedTables.end(), [&](const auto& e) { return e.second == res.name; }); ++k)
+                    res.name = "spc_" + px + "table_" + glslIdentifier(rs.name) + "_" + std::to_string(k);
+                sharedTables.push_back({{rs.produce, rs.glslType}, res.name});
+            }
             res.glslType = rs.glslType;
             res.binding = nextBinding++;
             res.set = opt.set;
@@ -155,10 +175,16 @@ GlslModule emitGlsl(const GraphDesc& g, const GlslOptions& opt) {
               << u.pointer << " = " << glslLiteral(u.type, u.value) << "\n";
         o << "};\n\n";
     }
-    for (auto& r : mod.resources)
-        o << layoutPrefix(r.set, r.binding) << ") uniform " << r.glslType << " " << r.name << ";  // node '" << r.nodeId << "' ("
-          << r.nodeType << ") resource '" << r.resource << "' (" << resourceKindName(r.kind) << ")"
-          << (r.file.empty() ? "" : ": \"" + r.file + "\", colorspace " + r.colorspace) << "\n";
+    for (auto& r : mod.resources) {
+        o << layoutPrefix(r.set, r.binding) << ") uniform " << r.glslType << " " << r.name << ";  // ";
+        if (r.kind == ResourceSpec::Kind::BuiltinTable)
+            o << "built-in table '" << r.resource << "', shared by every node reading it (first: '" << r.nodeId << "' ("
+              << r.nodeType << "))\n";
+        else
+            o << "node '" << r.nodeId << "' (" << r.nodeType << ") resource '" << r.resource << "' ("
+              << resourceKindName(r.kind) << ")" << (r.file.empty() ? "" : ": \"" + r.file + "\", colorspace " + r.colorspace)
+              << "\n";
+    }
     if (!mod.resources.empty()) o << "\n";
     // Shared libraries of the live nodes (NodeSpec::glslLibraries), each once, in first-use order over the sorted
     // node files, before any node file calls into them (guarded too: modules may be concatenated).

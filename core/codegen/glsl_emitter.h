@@ -33,7 +33,8 @@ struct GlslUniform {
 };
 
 // One GPU resource the host must bind (graph::ResourceSpec of a live node): its uniform, binding and what it holds.
-// exportGlslResources() produces the texels and sampler state.
+// exportGlslResources() produces the texels and sampler state. A built-in table (same texels for every instance) is
+// listed once per module and shared by all the nodes that read it; nodeId/nodeType name the first of them.
 struct GlslResource {
     std::string name;      // uniform name in the module, e.g. spc_res_albedo_image
     std::string glslType;  // sampler2D, sampler1DArray, ...

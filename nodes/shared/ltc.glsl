@@ -9,27 +9,56 @@
 
 const float SPC_LTC_INV_2PI = 0.15915494309189533577;
 
+// The angle in [0, π] of the point (x, y), y >= 0, to float precision. GLSL's atan has no precision requirement and
+// llvmpipe's is a short polynomial whose error the cancelling edge sums amplify: with atan(y, x) the exact-clip
+// polygon integrals differed from the CPU's (double) by up to 7e-4 relative (test_glsl_ltc), with this one by 4e-5.
+// Octant reduction to t in [0, 1], t' = (t − 1)/(t + 1) with +π/4 for t > tan(π/8), then the Taylor series of atan
+// on |t'| <= tan(π/8) to degree 21 (truncation < 1e-9).
+float spc_ltc_angle(float y, float x) {
+    float ax = abs(x);
+    bool swap = y > ax;
+    float t = swap ? ax / y : (ax > 0.0 ? y / ax : 0.0);
+    float off = 0.0;
+    if (t > 0.41421356) {
+        t = (t - 1.0) / (t + 1.0);
+        off = 0.78539816339744831;
+    }
+    float t2 = t * t;
+    float p = -1.0 / 21.0;
+    p = p * t2 + 1.0 / 19.0;
+    p = p * t2 - 1.0 / 17.0;
+    p = p * t2 + 1.0 / 15.0;
+    p = p * t2 - 1.0 / 13.0;
+    p = p * t2 + 1.0 / 11.0;
+    p = p * t2 - 1.0 / 9.0;
+    p = p * t2 + 1.0 / 7.0;
+    p = p * t2 - 1.0 / 5.0;
+    p = p * t2 + 1.0 / 3.0;
+    float r = off + (t - t * t2 * p);
+    if (swap) r = 1.5707963267948966 - r;
+    return x < 0.0 ? 3.14159265358979324 - r : r;
+}
+
 // One edge term of Lambert's form factor for unit a, b (HDHN16 Eq. 11, ltc-filtering.md §3 step 2):
-// θ·[(a×b)/|a×b|]_z / 2π. θ = atan(|a×b|, a·b) instead of the CPU's acos(a·b): in float, acos of a dot product
+// θ·[(a×b)/|a×b|]_z / 2π. θ from (|a×b|, a·b) instead of the CPU's acos(a·b): in float, acos of a dot product
 // near 1 loses all relative precision (short edges), the two-argument form keeps it for every angle.
 float spc_ltc_edge_exact(vec3 a, vec3 b) {
     vec3 c = cross(a, b);
     float s = length(c);
     if (!(s > 0.0)) return 0.0;  // coincident (or antipodal) vertices: no edge
-    return atan(s, dot(a, b)) * (c.z / s) * SPC_LTC_INV_2PI;
+    return spc_ltc_angle(s, dot(a, b)) * (c.z / s) * SPC_LTC_INV_2PI;
 }
 
-// θ/sin θ/2π for x = cos θ: ltc_code's rational fit (§3 step 3, ltc::rationalEdgeFactor), with θ/sin θ =
-// π/sin θ − θ'/sin θ' (θ' = π − θ) for x < 0.
-float spc_ltc_edge_factor(float x) {
-    float y = abs(x);
-    float a = 0.8543985 + (0.4965155 + 0.0145206 * y) * y;
-    float b = 3.4175940 + (4.1616724 + y) * y;
-    float v = a / b;
-    return x >= 0.0 ? v : 0.5 / sqrt(max(1.0 - x * x, 1e-7)) - v;
+// The edge's contribution to the form-factor vector for unit a, b (ltc::edgeVectorRational): (a×b)·θ/sin θ/2π with
+// x = a·b = cos θ and ltc_code's rational fit of θ/sin θ/2π (§3 step 3), using θ/sin θ = π/sin θ − θ'/sin θ'
+// (θ' = π − θ) for x < 0. There sin²θ is taken as |a×b|², not 1 − x² as on the CPU: equal for unit vectors, but in
+// float 1 − x² cancels for nearly opposite vertices (wide edges of grazing GGX lobes in cosine space).
+vec3 spc_ltc_edge_vector(vec3 a, vec3 b) {
+    vec3 c = cross(a, b);
+    float x = dot(a, b), y = abs(x);
+    float v = (0.8543985 + (0.4965155 + 0.0145206 * y) * y) / (3.4175940 + (4.1616724 + y) * y);
+    return c * (x >= 0.0 ? v : 0.5 / sqrt(max(dot(c, c), 1e-7)) - v);
 }
-// The edge's contribution to the form-factor vector, (a×b)·factor(a·b) for unit a, b (ltc::edgeVectorRational).
-vec3 spc_ltc_edge_vector(vec3 a, vec3 b) { return cross(a, b) * spc_ltc_edge_factor(dot(a, b)); }
 
 // Sutherland-Hodgman clip of a polygon of n <= 4 vertices against the half-space z > 0 of cosine space (§3 step 4,
 // ltc::clipToUpperHemisphere): at most 5 vertices out; the new vertices lie exactly on z = 0.
@@ -54,29 +83,11 @@ int spc_ltc_clip(vec3 v[4], int n, out vec3 c[5]) {
 // the CPU's lutCoord computes it ((c·63)/64, then the bias) so both round alike.
 float spc_ltc_coord(float c) { return c * 63.0 / 64.0 + 0.5 / 64.0; }
 
-// A 64×64 table at texture coordinates uv: texture() (GL_LINEAR, CLAMP_TO_EDGE, as the resources declare), or with
-// SPC_LTC_MANUAL_BILINEAR the same filter written out with texelFetch in ltc::sampleBilinear's float operations.
-vec4 spc_ltc_lookup(sampler2D table, vec2 uv) {
-#ifdef SPC_LTC_MANUAL_BILINEAR
-    ivec2 n = textureSize(table, 0);
-    vec2 x = uv * vec2(n) - 0.5;
-    vec2 x0 = floor(x), fr = x - x0;
-    ivec2 i0 = ivec2(x0);
-    ivec2 a = clamp(i0, ivec2(0), n - 1), b = clamp(i0 + 1, ivec2(0), n - 1);
-    vec4 p00 = texelFetch(table, ivec2(a.x, a.y), 0), p10 = texelFetch(table, ivec2(b.x, a.y), 0);
-    vec4 p01 = texelFetch(table, ivec2(a.x, b.y), 0), p11 = texelFetch(table, ivec2(b.x, b.y), 0);
-    vec4 lo = p00 + (p10 - p00) * fr.x, hi = p01 + (p11 - p01) * fr.x;
-    return lo + (hi - lo) * fr.y;
-#else
-    return texture(table, uv);
-#endif
-}
-
 // scale(z, len) of the clip-free path (§3 step 5, ltc::sphereScale): ltc_amplitude.w, GL_LINEAR + CLAMP_TO_EDGE,
 // which is what ltc::sampleBilinear reproduces on the CPU.
 float spc_ltc_sphere_scale(sampler2D ltc_amplitude, float z, float len) {
     vec2 uv = vec2(spc_ltc_coord(clamp(0.5 * z + 0.5, 0.0, 1.0)), spc_ltc_coord(clamp(len, 0.0, 1.0)));
-    return spc_ltc_lookup(ltc_amplitude, uv).w;
+    return texture(ltc_amplitude, uv).w;
 }
 
 // ∫_P D_o over a polygon already in cosine space (vertices relative to the shading point, any length,
@@ -135,8 +146,8 @@ void spc_ltc_ggx_isotropic(sampler2D ltc_matrix, sampler2D ltc_amplitude, float 
                            out vec2 magFres) {
     float cosTheta = clamp(wo.z, 0.0, 1.0);
     vec2 uv = vec2(spc_ltc_coord(sqrt(clamp(alpha, 0.0, 1.0))), spc_ltc_coord(sqrt(1.0 - cosTheta)));
-    vec4 m = spc_ltc_lookup(ltc_matrix, uv);
-    magFres = spc_ltc_lookup(ltc_amplitude, uv).xy;
+    vec4 m = texture(ltc_matrix, uv);
+    magFres = texture(ltc_amplitude, uv).xy;
     mat3 inv = mat3(0.0);
     inv[0][0] = m.x;
     inv[0][2] = m.y;
@@ -161,7 +172,7 @@ void spc_ltc_ggx_anisotropic(sampler2D ltc_anisotropic, float alphaX, float alph
     int np = size.y / n;
     float sx = wo.x < 0.0 ? -1.0 : 1.0, sy = wo.y < 0.0 ? -1.0 : 1.0;
     float cosTheta = clamp(wo.z, 0.0, 1.0);
-    float phi = atan(abs(wo.y), abs(wo.x));
+    float phi = spc_ltc_angle(abs(wo.y), abs(wo.x));  // atan2, accurate (see spc_ltc_angle)
     float c[4];
     c[0] = sqrt(clamp(alphaX, 0.0, 1.0)) * float(n - 1);
     c[1] = sqrt(clamp(alphaY, 0.0, 1.0)) * float(n - 1);
@@ -206,7 +217,10 @@ void spc_ltc_ggx_matrix(sampler2D ltc_matrix, sampler2D ltc_amplitude, sampler2D
                         out mat3 invM, out vec2 magFres) {
     float a = A.x, c = A.y, d = A.z;
     float h = 0.5 * (a + d), g = sqrt(max(0.0, 0.25 * (a - d) * (a - d) + c * c));
-    float ax = sqrt(max(h + g, 0.0)), ay = sqrt(max(h - g, 0.0));
+    // λ2 = det A / λ1 rather than h − g: in float the difference cancels for strongly anisotropic A (relative error
+    // ~1e-7·λ1/λ2), the quotient does not (the CPU subtracts in double).
+    float l1 = max(h + g, 0.0);
+    float ax = sqrt(l1), ay = l1 > 0.0 ? sqrt(max(a * d - c * c, 0.0) / l1) : 0.0;
     if (abs(ax - ay) <= 1e-4 * ax) {
         spc_ltc_ggx_isotropic(ltc_matrix, ltc_amplitude, 0.5 * (ax + ay), wo, invM, magFres);
         return;
@@ -215,8 +229,18 @@ void spc_ltc_ggx_matrix(sampler2D ltc_matrix, sampler2D ltc_amplitude, sampler2D
         spc_ltc_ggx_anisotropic(ltc_anisotropic, sqrt(max(a, 0.0)), sqrt(max(d, 0.0)), wo, invM, magFres);
         return;
     }
-    float phi = 0.5 * atan(2.0 * c, a - d);
-    float cs = cos(phi), sn = sin(phi);
+    // (cos φ0, sin φ0) for φ0 = ½ atan2(2c, a − d) in (−π/2, π/2] without trigonometry (whose GL implementations
+    // carry ~1e-6 errors): cos 2φ0 = (a − d)/2g, sin 2φ0 = c/g and the half-angle formulas, each branch on the side
+    // where it does not cancel.
+    float c2 = 0.5 * (a - d) / g, s2 = c / g;
+    float cs, sn;
+    if (c2 >= 0.0) {
+        cs = sqrt(0.5 * (1.0 + c2));
+        sn = s2 / (2.0 * cs);
+    } else {
+        sn = (c < 0.0 ? -1.0 : 1.0) * sqrt(0.5 * (1.0 - c2));
+        cs = s2 / (2.0 * sn);
+    }
     mat3 R = mat3(1.0);  // rows (cs, sn, 0), (−sn, cs, 0), (0, 0, 1): lobe frame -> principal frame
     R[0][0] = cs;
     R[1][0] = sn;

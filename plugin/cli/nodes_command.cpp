@@ -299,6 +299,13 @@ std::string pageHeader(size_t nodeCount, size_t categoryCount) {
          "differ by design |\n"
          "| emitted modules (tests/glsl/data/materials.json: gold_mirror, brushed_steel, plastic, bumpy_copper) | ≤ "
          "1.4e-5 | whole module: uniform block, bindings, specula_eval/emission; tolerance 2e-4 |\n\n";
+    h += "Polygon queries (LTC quad lights, `tests/glsl/test_glsl_ltc.cpp`): bsdf.diffuse, bsdf.ggx, bsdf.ggx_filtered "
+         "and\nbsdf.beckmann_lean answer `SPC_QUERY_POLYGON` through `nodes/shared/ltc.glsl` with the LTC tables bound "
+         "as\nbuilt-in resources. 4096 random frames, parameters, views and quads (fully above the horizon, straddling "
+         "it,\nseen from behind) per node, both horizon modes, against `Closure::integratePolygon`; same error metric. "
+         "Measured\nmaxima (clip / clip-free): diffuse 1.7e-5 / 1.7e-5, ggx 3.9e-5 / 4.0e-5, ggx_filtered 2.5e-5 / "
+         "2.5e-5,\nbeckmann_lean 3.2e-5 / 3.0e-5 (tolerance 1e-4); an emitted closure.mix of diffuse and anisotropic "
+         "ggx bound\nfrom its manifest: 1.2e-5.\n\n";
     return h;
 }
 
@@ -324,9 +331,20 @@ std::string nodeMarkdown(const NodeSpec& s) {
     m += "- GLSL: `" + s.glslPrototype() + "`";
     if (!s.glslFile.empty()) m += " in `nodes/" + s.glslFile + "`";
     m += "\n";
+    if (!s.glslLibraries.empty()) {
+        std::vector<std::string> libs;
+        for (auto& l : s.glslLibraries) libs.push_back("`nodes/" + l + "`");
+        m += "- GLSL libraries: " + join(libs, ", ") + "\n";
+    }
     m += "- parity tolerance: " + tolText(s.parityTolerance);
     if (!s.parityNote.empty()) m += " — " + s.parityNote;
     m += "\n\n";
+    if (!s.resources.empty()) {
+        m += "| resource | GLSL type | kind | doc |\n|---|---|---|---|\n";
+        for (auto& r : s.resources)
+            m += row({code(cell(r.name)), code(r.glslType), resourceKindName(r.kind), cell(r.doc)});
+        m += "\n";
+    }
     if (!s.inputs.empty()) {
         m += "| input | type | default | range | binding | doc |\n|---|---|---|---|---|---|\n";
         for (auto& p : s.inputs) {
@@ -346,12 +364,6 @@ std::string nodeMarkdown(const NodeSpec& s) {
     if (!s.outputs.empty()) {
         m += "| output | type | doc |\n|---|---|---|\n";
         for (auto& p : s.outputs) m += row({code(cell(p.name)), typeName(p.type), cell(p.doc)});
-        m += "\n";
-    }
-    if (!s.resources.empty()) {  // the GPU resources of the GLSL function (the manifest lists them per instance)
-        m += "| resource | GLSL type | kind | doc |\n|---|---|---|---|\n";
-        for (auto& r : s.resources)
-            m += row({code(cell(r.name)), code(cell(r.glslType)), resourceKindName(r.kind), cell(r.doc)});
         m += "\n";
     }
     return m;

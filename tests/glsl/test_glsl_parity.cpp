@@ -561,7 +561,7 @@ TEST(GlslManifestParity, TwoMaterialsWithResourcesInOneShader) {
         shader += src;
         mats.push_back(loadGraphMaterial(mj, "/materials/" + name, load));
     }
-    ASSERT_EQ(manifests[0]["resources"].size(), 2u);  // the image and the glint dictionary
+    ASSERT_EQ(manifests[0]["resources"].size(), 3u);  // the image, the diffuse's LTC amplitude table, the glint dictionary
     ASSERT_EQ(manifests[1]["resources"].size(), 2u);  // the LEAN moments and the dictionary
     shader += emittedMain(15, "spc_out = int(gl_FragCoord.x) == 0 ? vec4(specula_a_eval(s, wo, wi), 0.0) : "
                               "vec4(specula_b_eval(s, wo, wi), 0.0);");

@@ -28,7 +28,8 @@ void reg(NodeRegistry& r) {
     NodeSpec s;
     s.id = "bsdf.diffuse";
     s.category = "bsdf";
-    s.doc = "Lambertian diffuse reflection, f = color/π.";
+    s.doc = "Lambertian diffuse reflection, f = color/π. Quad lights in closed form (polygon queries): Lambert's form "
+            "factor (the LTC with M = I).";
     s.inputs = kParams.ports();
     s.outputs = kOutputs.ports();
     s.cpu = &cpu;

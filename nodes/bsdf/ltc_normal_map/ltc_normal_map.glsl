@@ -22,7 +22,7 @@ const float SPC_LNM_TWO_PI = 6.283185307179586;
 vec2 spc_lnm_mag_fres(sampler2D ltc_amplitude, float alpha, float cosTheta) {
     cosTheta = clamp(cosTheta, 0.0, 1.0);
     vec2 uv = vec2(spc_ltc_coord(sqrt(clamp(alpha, 0.0, 1.0))), spc_ltc_coord(sqrt(1.0 - cosTheta)));
-    return spc_ltc_lookup(ltc_amplitude, uv).xy;
+    return texture(ltc_amplitude, uv).xy;  // GL_LINEAR + CLAMP_TO_EDGE = ltc::sampleBilinear
 }
 
 // The θ of view row j of n (NormalMapLtcPrefilter viewTheta).
@@ -108,11 +108,11 @@ void spc_lnm_lookup(sampler2DArray tables, sampler2D normals, sampler2D ltc_matr
     int size = textureSize(normals, 0).x;
     if (!(wo.z > 0.0) || size < 1) return;
     int levels = findMSB(size);
-    // θ by the two-argument atan, not acos(wo.z): with acos the parity on llvmpipe was 2.2e-3 (its acos is a coarse
-    // polynomial), with atan 2.6e-5.
-    float theta = atan(length(wo.xy), wo.z);
-    float phi = (wo.x == 0.0 && wo.y == 0.0) ? 0.0 : atan(wo.y, wo.x);  // atan(0, 0) is undefined in GLSL
-    if (phi < 0.0) phi += SPC_LNM_TWO_PI;
+    // θ and φ from a float-accurate two-argument arctangent (shared/ltc.glsl), not acos(wo.z) / atan(y, x): GLSL sets
+    // no precision for them and llvmpipe's are short polynomials: direction parity 2.2e-3 with acos, 2.6e-5 with
+    // atan, 5.4e-6 with this (tests/glsl/test_glsl_parity.cpp).
+    float theta = spc_ltc_angle(length(wo.xy), wo.z);
+    float phi = wo.y >= 0.0 ? spc_ltc_angle(wo.y, wo.x) : SPC_LNM_TWO_PI - spc_ltc_angle(-wo.y, wo.x);
     if (any(isinf(uv)) || any(isnan(uv))) uv = vec2(0.0);
     // The MIP level: GL's ρ (the longer footprint axis in texels of the map), as the CPU computes it.
     float rho = max(length(duvdx), length(duvdy)) * float(size);
