@@ -179,6 +179,10 @@ graph::ResourceImage tablesImage(const void* prepared) {
     const auto* d = static_cast<const Prepared*>(prepared);
     const ltc::NormalMapLtcPrefilter& p = *d->prepared;
     const ltc::PrefilterSettings& s = p.settings();
+    // The GLSL hard-codes the default view grids (SPC_LNM_*): other grids would be read with the wrong layers.
+    const ltc::PrefilterSettings def;
+    if (s.specTheta != def.specTheta || s.specPhi != def.specPhi || s.diffTheta != def.diffTheta || s.diffPhi != def.diffPhi)
+        throw std::logic_error("bsdf.ltc_normal_map: the GLSL reads only the default view grids (8x16, 2x4)");
     const int nSpec = s.specTheta * s.specPhi, nDiff = s.diffTheta * s.diffPhi;
     const int layers = kTexelsPerLtc * (nSpec + nDiff);
     const int H = ltc::NormalMapLtcPrefilter::kRecordHalfs;
