@@ -2,10 +2,10 @@
 // bsdf.ggx_filtered and bsdf.beckmann_lean on Mesa llvmpipe against Closure::integratePolygon of the same node.
 //
 // Per node, 4096 samples with random frames, parameters (the parity ranges of docs/nodes.md), views and quads in three
-// classes (fully above the geometric horizon, straddling it, seen from behind = clockwise), each answered with both
-// horizon modes (exact clip, clip-free sphere table). The error measure is |gpu − cpu| / max(|cpu|, kFloor) per
-// channel; the limits below are the measured maxima rounded up (ltc-filtering.md §3; the CPU integrates in double,
-// the GLSL in float). Also an emitted material module (closure.mix of bsdf.diffuse and an anisotropic bsdf.ggx) whose
+// classes (fully above the geometric horizon, straddling it, seen from behind = clockwise; every fifth one cut to a
+// triangle), each answered with both horizon modes (exact clip, clip-free sphere table). The error measure is
+// |gpu − cpu| / max(|cpu|, kFloor) per channel; the limits are the measured maxima with margin (ltc-filtering.md §3;
+// the CPU integrates in double, the GLSL in float). Also an emitted material module (closure.mix of bsdf.diffuse and an anisotropic bsdf.ggx) whose
 // tables are bound from its manifest only, and the partial flag of a lobe without a closed form.
 #define GL_GLEXT_PROTOTYPES 1
 #include "core/codegen/glsl_emitter.h"
@@ -41,8 +41,8 @@ constexpr int kSamples = 4096;
 // Relative-error floor: integrals below it (e.g. the zeros of back-facing quads, or a sliver of a straddling quad)
 // are compared absolutely. The largest integrals are O(1) (a big quad in front of a diffuse or rough lobe).
 constexpr float kFloor = 1e-3f;
-// Data per sample: N3 T3 wo3 | polygon 4×3 | dwodx3 dwody3 | the node's inputs.
-constexpr int kPoly = 9, kDeriv = 21, kInputs = 27;
+// Data per sample: N3 T3 wo3 | polygon 4×3 | dwodx3 dwody3 | vertex count | the node's inputs.
+constexpr int kPoly = 9, kDeriv = 21, kCount = 27, kInputs = 28;
 
 Vec3 randUnit(std::mt19937& rng) {
     std::normal_distribution<float> n(0.f, 1.f);
@@ -133,7 +133,7 @@ void main() {
     s.position = vec3(0.0); s.normal = spc_in3(0); s.geometric_normal = s.normal; s.tangent = vec4(spc_in3(3), 1.0);
     s.uv = vec2(0.0); s.dPdx = vec3(0.0); s.dPdy = vec3(0.0); s.duvdx = vec2(0.0); s.duvdy = vec2(0.0);
     s.dNdx = vec3(0.0); s.dNdy = vec3(0.0); s.dwodx = spc_in3(21); s.dwody = spc_in3(24);
-    SpeculaClosureQuery q = specula_polygon_query(spc_in3(6), spc_in3(9), spc_in3(12), spc_in3(15), spc_in3(18), 4,
+    SpeculaClosureQuery q = specula_polygon_query(spc_in3(6), spc_in3(9), spc_in3(12), spc_in3(15), spc_in3(18), int(spc_in(27)),
                                                   int(gl_FragCoord.x) == 0 ? SPC_HORIZON_CLIP : SPC_HORIZON_CLIPLESS);
 )";
     auto expr = [&](int k) -> std::string {
@@ -201,7 +201,8 @@ Stats runNode(const NodeSpec& s, std::string* failure) {
         while (!randomQuad(rng, j % 3, f.t, f.b, f.n, q)) {
         }
         for (int k = 0; k < 4; ++k) put3(kPoly + 3 * k, q[k]);
-        for (int k = kDeriv; k < kInputs; ++k) d[k] = -0.05f + 0.1f * u01(rng);
+        for (int k = kDeriv; k < kCount; ++k) d[k] = -0.05f + 0.1f * u01(rng);
+        d[kCount] = j % 5 == 4 ? 3.f : 4.f;  // every fifth polygon a triangle (its first three vertices)
     }
     // GPU
     const int texW = (L.floats + 3) / 4;
@@ -273,7 +274,7 @@ Stats runNode(const NodeSpec& s, std::string* failure) {
             bq.wo = sp.wo;
             bq.polygonHorizon = uint8_t(h);
             BsdfEval e;
-            LobeMask done = cl.integratePolygon(bq, poly, 4, e);
+            LobeMask done = cl.integratePolygon(bq, poly, int(d[kCount]), e);
             if (done != cl.allLobes()) *failure = s.id + ": a lobe has no closed form on the CPU";
             Color3 c = e.total();
             const float* gp = &gpu[(size_t(j) * 2 + size_t(h)) * 4];
@@ -296,8 +297,8 @@ Stats runNode(const NodeSpec& s, std::string* failure) {
 }
 
 // Limits per node and horizon mode over all three quad classes. Measured maxima on llvmpipe (Mesa, 4096 samples,
-// floor 1e-3; docs/ltc-tables.md "GLSL"), clip / clip-free: diffuse 1.7e-5 / 1.7e-5, ggx 3.9e-5 / 4.0e-5,
-// ggx_filtered 2.5e-5 / 2.5e-5, beckmann_lean 3.2e-5 / 3.0e-5. The residue is float rounding (vertex transform,
+// floor 1e-3; docs/ltc-tables.md "GLSL"), clip / clip-free: diffuse 1.8e-5 / 1.9e-5, ggx 6.4e-5 / 4.0e-5,
+// ggx_filtered 2.5e-5 / 2.5e-5, beckmann_lean 3.2e-5 / 2.6e-5. The residue is float rounding (vertex transform,
 // normalisation, edge sums) against the CPU's double integration, largest for sharp lobes (α down to 0.01) whose
 // peak a quad edge cuts.
 struct Limits {
