@@ -261,7 +261,8 @@ GlslModule emitGlsl(const GraphDesc& g, const GlslOptions& opt) {
 }
 
 std::vector<ResourceImage> nodeResourceImages(const NodeSpec& spec, const std::vector<std::string>& strings,
-                                              const std::vector<std::string>& pointers, const GraphLoadContext& load) {
+                                              const std::vector<std::string>& pointers, const GraphLoadContext& load,
+                                              const std::vector<std::array<float, 3>>* values) {
     std::shared_ptr<const void> prepared;
     if (spec.prepare) {
         PrepareContext pc;
@@ -269,6 +270,7 @@ std::vector<ResourceImage> nodeResourceImages(const NodeSpec& spec, const std::v
         pc.strings = &strings;
         pc.load = &load;
         pc.pointers = pointers;
+        pc.values = values;
         prepared = spec.prepare(pc);
     }
     std::vector<ResourceImage> out;
@@ -287,8 +289,9 @@ std::vector<ResourceImage> exportGlslResources(const GraphDesc& g, const GlslMod
         const NodeInstance& ni = g.nodes[size_t(n)];
         if (!perNode.count(n)) {
             std::vector<std::string> strings, pointers;
-            for (const InputValue& v : ni.inputs) strings.push_back(v.str), pointers.push_back(v.pointer);
-            perNode[n] = nodeResourceImages(*ni.spec, strings, pointers, load);
+            std::vector<std::array<float, 3>> values;
+            for (const InputValue& v : ni.inputs) strings.push_back(v.str), pointers.push_back(v.pointer), values.push_back(v.value);
+            perNode[n] = nodeResourceImages(*ni.spec, strings, pointers, load, &values);
         }
         for (size_t k = 0; k < ni.spec->resources.size(); ++k)
             if (ni.spec->resources[k].name == r.resource) out.push_back(perNode[n][k]);

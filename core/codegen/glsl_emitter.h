@@ -56,10 +56,11 @@ struct GlslModule {
 
 GlslModule emitGlsl(const graph::GraphDesc& g, const GlslOptions& opt = {});
 
-// The texels of every resource of one node instance (its string inputs and their JSON pointers, in port order),
-// prepared with 'load' as the graph loader would.
+// The texels of every resource of one node instance (its string inputs, their JSON pointers and its numeric input
+// values, in port order; values null = the ports' defaults), prepared with 'load' as the graph loader would.
 std::vector<graph::ResourceImage> nodeResourceImages(const graph::NodeSpec& spec, const std::vector<std::string>& strings,
-                                                     const std::vector<std::string>& pointers, const GraphLoadContext& load);
+                                                     const std::vector<std::string>& pointers, const GraphLoadContext& load,
+                                                     const std::vector<std::array<float, 3>>* values = nullptr);
 // The texels and sampler state of every resource of 'mod' (same order), from the material's nodes prepared with
 // 'load' (texture files are read through its TextureStore). Throws specula::InputError like the graph loader.
 std::vector<graph::ResourceImage> exportGlslResources(const graph::GraphDesc& g, const GlslModule& mod,

@@ -4,6 +4,7 @@
 #include "core/io/image_io.h"
 #include "core/util/error.h"
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 
@@ -40,6 +41,7 @@ json glslManifest(const GlslModule& mod, const std::vector<graph::ResourceImage>
             json levels = json::array();
             for (size_t l = 0; l < img.levels.size(); ++l) {
                 json lv = {{"width", img.levels[l].width}, {"height", img.levels[l].height}};
+                if (img.levels[l].layers != 1) lv["layers"] = img.levels[l].layers;  // 2D arrays only
                 if (r < levelFiles.size() && l < levelFiles[r].size()) lv["exr"] = levelFiles[r][l];
                 levels.push_back(lv);
             }
@@ -64,16 +66,19 @@ json writeGlslResources(const GlslModule& mod, const std::vector<graph::Resource
     for (size_t r = 0; r < images.size() && r < mod.resources.size(); ++r) {
         for (size_t l = 0; l < images[r].levels.size(); ++l) {
             const graph::ResourceImage::Level& lv = images[r].levels[l];
+            // A 2D array's layers are stacked in one image, layer 0 at the bottom (its rows are the GL rows in order).
+            const int rows = lv.height * std::max(lv.layers, 1);
             ImageSet set;
             set.width = lv.width;
-            set.height = lv.height;
+            set.height = rows;
             AovBuffer b;
             b.name = "beauty";
             b.channelNames = {"R", "G", "B", "A"};
-            b.pixels.resize(size_t(lv.width) * lv.height * 4);
-            for (int y = 0; y < lv.height; ++y)  // EXR rows run top to bottom; GL row 0 is the bottom one
-                std::copy_n(&lv.rgba[size_t(lv.height - 1 - y) * lv.width * 4], size_t(lv.width) * 4,
+            b.pixels.resize(size_t(lv.width) * rows * 4);
+            for (int y = 0; y < rows; ++y)  // EXR rows run top to bottom; GL row 0 is the bottom one
+                std::copy_n(&lv.rgba[size_t(rows - 1 - y) * lv.width * 4], size_t(lv.width) * 4,
                             &b.pixels[size_t(y) * lv.width * 4]);
+            if (lv.layers != 1) set.metadata["specula:layers"] = std::to_string(lv.layers);
             set.aovs.push_back(std::move(b));
             set.metadata["specula:resource"] = mod.resources[r].name;
             std::string name = mod.resources[r].name + "_l" + std::to_string(l) + ".exr";

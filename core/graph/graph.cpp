@@ -406,7 +406,9 @@ Program Program::compile(const GraphDesc& g, const std::vector<std::pair<int, in
             pc.spec = &spec;
             pc.strings = &strings;
             pc.load = load;
-            for (auto& v : n.inputs) pc.pointers.push_back(v.pointer);
+            std::vector<std::array<float, 3>> values;
+            for (auto& v : n.inputs) pc.pointers.push_back(v.pointer), values.push_back(v.value);
+            pc.values = &values;
             auto d = spec.prepare(pc);
             ins.data = d.get();
             prog.data_.push_back(std::move(d));

@@ -179,4 +179,13 @@ size_t preparePort(const NodeSpec* spec, const std::string& port) {
 const std::string& PrepareContext::str(const std::string& port) const { return (*strings)[preparePort(spec, port)]; }
 const std::string& PrepareContext::pointer(const std::string& port) const { return pointers[preparePort(spec, port)]; }
 
+std::array<float, 3> PrepareContext::number3(const std::string& port) const {
+    const size_t k = preparePort(spec, port);
+    const PortSpec& p = spec->inputs[k];
+    if (!p.uniform || p.type == TypeDesc::String || p.type == TypeDesc::Closure)
+        nodeParamsFatal("prepare reads '" + port + "' of " + spec->id + ", which is not a uniform numeric input");
+    return values && k < values->size() ? (*values)[k] : p.def;
+}
+float PrepareContext::number(const std::string& port) const { return number3(port)[0]; }
+
 }  // namespace specula::graph

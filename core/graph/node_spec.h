@@ -112,11 +112,13 @@ struct PortSpec {
 };
 
 // Texels of a GPU resource as a host uploads them: RGBA32F levels (level 0 first), rows bottom-up, and the sampler
-// state the node's GLSL expects.
+// state the node's GLSL expects. 2D arrays (sampler2DArray, GL_TEXTURE_2D_ARRAY): every level has the same 'layers'
+// and holds them one after the other (layer 0 first), as glTexImage3D reads them.
 struct ResourceImage {
     struct Level {
         int width = 0, height = 0;  // height = layer count for 1D arrays
-        std::vector<float> rgba;    // width * height * 4 floats
+        int layers = 1;             // 2D arrays: the layer count (1 otherwise)
+        std::vector<float> rgba;    // width * height * layers * 4 floats
     };
     std::vector<Level> levels;
     std::string colorspace = "raw";  // the colour space of the texel values ("raw": data)
@@ -148,17 +150,25 @@ struct EvalContext;
 // CPU entry of a node: reads its input registers, writes its output registers.
 using CpuFn = void (*)(EvalContext& ctx, const Instr& ins);
 
-// Per-instance preparation (string/enum literals -> opaque data such as a texture handle).
+// Per-instance preparation (string/enum literals and uniform numeric literals -> opaque data such as a texture handle
+// or tables fitted for one roughness).
 struct NodeSpec;
 struct PrepareContext {
     const NodeSpec* spec = nullptr;
     const std::vector<std::string>* strings;  // per input port; "" for non-string ports
     const GraphLoadContext* load;             // may be null (e.g. codegen-only use)
     std::vector<std::string> pointers;        // JSON pointer per input port (for errors)
+    // Per input port: the literal (or default) numeric value, meaningful for PortSpec::uniform ports only (those can
+    // never be connected, so their value is known before any shading point). Null: the ports' defaults.
+    const std::vector<std::array<float, 3>>* values = nullptr;
     // The string literal and the JSON pointer of the input port named 'port' (aborts on an unknown name: a
     // programming error found by every test).
     const std::string& str(const std::string& port) const;
     const std::string& pointer(const std::string& port) const;
+    // The value of a uniform numeric input (first component; number3 all three). Aborts for an unknown port or one
+    // that is not uniform: a per-shading-point input has no value at prepare time.
+    float number(const std::string& port) const;
+    std::array<float, 3> number3(const std::string& port) const;
 };
 using PrepareFn = std::shared_ptr<const void> (*)(const PrepareContext& ctx);
 

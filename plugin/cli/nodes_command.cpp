@@ -275,8 +275,9 @@ std::string pageHeader(size_t nodeCount, size_t categoryCount) {
 
     h += "## CPU/GLSL parity\n\n";
     h += "ctest label `glsl`, `tests/glsl/test_glsl_parity.cpp`: per node, 1024 random input sets (inside each port's\n"
-         "documented range; normals/tangents random unit vectors; directions 85 % above the BSDF's normal) run through "
-         "the\nnode's GLSL on Mesa llvmpipe (headless EGL, RGBA32F) and through the CPU program; error metric\n"
+         "documented range; uniform ports at their default, as one material has one value; normals/tangents random\n"
+         "unit vectors; directions 85 % above the BSDF's normal) run through the node's GLSL on Mesa llvmpipe "
+         "(headless\nEGL, RGBA32F) and through the CPU program; error metric\n"
          "`|gpu − cpu| / max(|cpu|, 1e-3)`. The tolerance is `NodeSpec::parityTolerance` (default 1e-4; a looser one "
          "carries\na `parityNote`), listed under each node below, so the test and this page use one number.\n\n";
     h += "Measured maximum relative errors (Mesa 22.3.6 / LLVM 15, llvmpipe; measurements, not registry data; nodes "

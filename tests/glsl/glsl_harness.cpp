@@ -187,12 +187,16 @@ GLenum glWrap(const std::string& w) {
 
 GlTexture glResourceTexture(const graph::ResourceImage& img, const std::string& glslType) {
     GlTexture t;
-    t.target = glslType == "sampler1DArray" ? GL_TEXTURE_1D_ARRAY : GL_TEXTURE_2D;
+    t.target = glslType == "sampler1DArray" ? GL_TEXTURE_1D_ARRAY : glslType == "sampler2DArray" ? GL_TEXTURE_2D_ARRAY : GL_TEXTURE_2D;
     glGenTextures(1, &t.name);
     glBindTexture(t.target, t.name);
-    for (size_t l = 0; l < img.levels.size(); ++l)
-        glTexImage2D(t.target, GLint(l), GL_RGBA32F, img.levels[l].width, img.levels[l].height, 0, GL_RGBA, GL_FLOAT,
-                     img.levels[l].rgba.data());
+    for (size_t l = 0; l < img.levels.size(); ++l) {
+        const graph::ResourceImage::Level& lv = img.levels[l];
+        if (t.target == GL_TEXTURE_2D_ARRAY)
+            glTexImage3D(t.target, GLint(l), GL_RGBA32F, lv.width, lv.height, lv.layers, 0, GL_RGBA, GL_FLOAT, lv.rgba.data());
+        else
+            glTexImage2D(t.target, GLint(l), GL_RGBA32F, lv.width, lv.height, 0, GL_RGBA, GL_FLOAT, lv.rgba.data());
+    }
     if (img.generateMipmaps) {
         glGenerateMipmap(t.target);
     } else {
@@ -202,7 +206,7 @@ GlTexture glResourceTexture(const graph::ResourceImage& img, const std::string& 
     glTexParameteri(t.target, GL_TEXTURE_MIN_FILTER, GLint(glFilter(img.minFilter)));
     glTexParameteri(t.target, GL_TEXTURE_MAG_FILTER, GLint(glFilter(img.magFilter)));
     glTexParameteri(t.target, GL_TEXTURE_WRAP_S, GLint(glWrap(img.wrapS)));
-    if (t.target == GL_TEXTURE_2D) glTexParameteri(t.target, GL_TEXTURE_WRAP_T, GLint(glWrap(img.wrapT)));
+    if (t.target != GL_TEXTURE_1D_ARRAY) glTexParameteri(t.target, GL_TEXTURE_WRAP_T, GLint(glWrap(img.wrapT)));
     return t;
 }
 

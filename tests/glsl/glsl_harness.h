@@ -32,7 +32,8 @@ std::string nodeCall(const graph::NodeSpec& spec, const std::function<std::strin
                      const std::vector<std::string>& outVars, const std::vector<std::string>& resourceVars = {});
 
 // A texture made from a resource's texels and sampler state (graph::ResourceImage), of the target its GLSL type
-// needs (sampler2D: GL_TEXTURE_2D, sampler1DArray: GL_TEXTURE_1D_ARRAY). Bind it at the resource's binding.
+// needs (sampler2D: GL_TEXTURE_2D, sampler1DArray: GL_TEXTURE_1D_ARRAY, sampler2DArray:
+// GL_TEXTURE_2D_ARRAY with ResourceImage::Level::layers). Bind it at the resource's binding.
 struct GlTexture {
     unsigned name = 0, target = 0;
 };

@@ -91,6 +91,8 @@ std::vector<std::string> resourceStrings(const NodeSpec& s) {
         if (!r.fileInput.empty()) v[size_t(s.inputIndex(r.fileInput))] = "grid.exr";
         if (!r.colorspaceInput.empty()) v[size_t(s.inputIndex(r.colorspaceInput))] = "raw";
     }
+    // A square power-of-two map (the fixture image is 16×12): a generated 16² flakes map, 4 stored MIP levels.
+    if (s.id == "bsdf.ltc_normal_map") v[size_t(s.inputIndex("normal_map"))] = "generate:flakes:16:7";
     return v;
 }
 
@@ -240,12 +242,22 @@ ParityResult runParity(const NodeSpec& s, std::string* failure) {
                 d[o] = p.uniform ? 0.f : float(j % int(p.enumValues.size()));
             } else if (p.type == TypeDesc::Normal3 || (p.type == TypeDesc::Vector3 && p.binding == GeomBinding::T)) {
                 put3(o, randUnit(rng));
+            } else if (p.uniform) {
+                // A uniform numeric port is one value per material, which a prepare step may have baked into the
+                // node's resources (bsdf.ltc_normal_map's tables are fitted for its roughness): its default.
+                for (int c = 0; c < typeWidth(p.type); ++c) d[o + c] = p.def[size_t(c)];
             } else {
                 float lo, hi;
                 parityRange(s, p, lo, hi);
                 for (int c = 0; c < typeWidth(p.type); ++c) d[o + c] = rnd(lo, hi);
             }
         }
+        // bsdf.ltc_normal_map: footprints spread over all its MIP regimes, not only the coarse levels the port
+        // range gives on the 16² map (|duv| ~ 0.3: level ~2.3): scaled by 2^-(j mod 6), so the MIP-0 texels, the
+        // MIP 0-1 blend and the stored levels' trilinear filter are all compared.
+        if (s.id == "bsdf.ltc_normal_map")
+            for (const char* name : {"duvdx", "duvdy"})
+                for (int c = 0; c < 2; ++c) d[L.inOffset[size_t(s.inputIndex(name))] + c] *= std::ldexp(1.f, -(j % 6));
         // Directions: mostly above the BSDF's normal (or the shading normal), some below.
         Vec3 ref = nrm >= 0 && L.inOffset[nrm] >= 0 ? Vec3(d[L.inOffset[nrm]], d[L.inOffset[nrm] + 1], d[L.inOffset[nrm] + 2]) : N;
         for (int o : {kGeom, kGeom + 3}) {
@@ -633,6 +645,91 @@ TEST(GlslManifestParity, TwoMaterialsWithResourcesInOneShader) {
     std::printf("PARITY two materials via manifests  max_rel_err %.3g  (non-zero channels %d)\n", maxErr, nonZero);
     EXPECT_GT(nonZero, kSamples);  // the comparison is not of zeros
     EXPECT_LE(maxErr, 2e-4f);
+}
+
+// bsdf.ltc_normal_map in an emitted module bound from its manifest alone: non-default uniform literals (roughness,
+// strength, convention) reach both the uniform block and the prepared tables (PrepareContext::number), the tables are a
+// layered 2D array (ResourceImage::Level::layers), and a footprint of ~1.5 texels blends the MIP-0 texels with level 1.
+TEST(GlslManifestParity, LtcNormalMapModuleBoundFromItsManifest) {
+    std::string why;
+    ASSERT_TRUE(glsltest::glContext(&why)) << why;
+    const json mj = json::parse(R"({"nodes": {"n": {"type": "bsdf.ltc_normal_map", "inputs": {
+        "normal_map": "generate:flakes:16:3", "convention": "directx", "roughness": 0.45, "strength": 0.8,
+        "specular_color": [0.9, 0.7, 0.5], "diffuse_color": [0.2, 0.4, 0.3],
+        "duvdx": [0.09, 0.02], "duvdy": [-0.01, 0.06]}}}, "output": "@n.bsdf"})");
+    GraphLoadContext load{nullptr, ""};
+    GraphDesc g = parseGraph(mj, "/materials/nm");
+    codegen::GlslModule mod = codegen::emitGlsl(g);
+    const std::vector<ResourceImage> images = codegen::exportGlslResources(g, mod, load);
+    const json manifest = codegen::glslManifest(mod, images, {});
+    ASSERT_EQ(manifest["resources"].size(), 4u);
+    ASSERT_EQ(manifest["resources"][0]["glsl_type"], "sampler2DArray");
+    auto mat = loadGraphMaterial(mj, "/materials/nm", load);
+    std::string log;
+    unsigned prog = glsltest::glProgram(mod.source + emittedMain(15, "spc_out = vec4(specula_eval(s, wo, wi), 0.0);"), &log);
+    ASSERT_NE(prog, 0u) << log;
+
+    std::mt19937 rng(17);
+    std::uniform_real_distribution<float> u01(0.f, 1.f);
+    std::vector<float> packed(size_t(kSamples) * 20, 0.f);
+    for (int j = 0; j < kSamples; ++j) {
+        Vec3 N = glm::normalize(Vec3(0.3f * (u01(rng) - 0.5f), 0.3f * (u01(rng) - 0.5f), 1.f));
+        Vec3 T = glm::normalize(glm::cross(Vec3(0, 1, 0), N));
+        Vec3 wo = randUnit(rng), wi = randUnit(rng);
+        if (glm::dot(wo, N) < 0.f) wo = -wo;
+        if (glm::dot(wi, N) < 0.f) wi = -wi;
+        float v[] = {0.f, 0.f, 0.f, N.x, N.y, N.z, T.x, T.y, T.z, 2.f * u01(rng) - 0.5f, 2.f * u01(rng) - 0.5f, 0.f,
+                     wo.x, wo.y, wo.z, wi.x, wi.y, wi.z, 0.f, 0.f};
+        std::copy(v, v + 20, &packed[size_t(j) * 20]);
+    }
+    unsigned dataTex = glsltest::glDataTexture(5, kSamples, packed);
+    const json& ub = manifest["uniform_block"];
+    std::vector<char> bytes(std::max<size_t>(ub["size"].get<size_t>(), 16), 0);
+    for (const json& mem : ub["members"]) {
+        std::vector<float> v = mem["value"].get<std::vector<float>>();
+        std::memcpy(&bytes[mem["offset"].get<size_t>()], v.data(), 4 * v.size());
+    }
+    GLuint buf;
+    glGenBuffers(1, &buf);
+    glBindBuffer(GL_UNIFORM_BUFFER, buf);
+    glBufferData(GL_UNIFORM_BUFFER, GLsizeiptr(bytes.size()), bytes.data(), GL_STATIC_DRAW);
+    std::vector<glsltest::GlTexture> textures;
+    for (size_t r = 0; r < images.size(); ++r)
+        textures.push_back(glsltest::glResourceTexture(images[r], manifest["resources"][r]["glsl_type"].get<std::string>()));
+    std::vector<float> gpu = glsltest::glRun(prog, 1, kSamples, [&] {
+        glBindBufferBase(GL_UNIFORM_BUFFER, ub["binding"].get<GLuint>(), buf);
+        for (size_t t = 0; t < textures.size(); ++t) {
+            glActiveTexture(GLenum(GL_TEXTURE0 + manifest["resources"][t]["binding"].get<int>()));
+            glBindTexture(textures[t].target, textures[t].name);
+        }
+        glActiveTexture(GL_TEXTURE15);
+        glBindTexture(GL_TEXTURE_2D, dataTex);
+    });
+    glDeleteBuffers(1, &buf);
+    for (auto& t : textures) glDeleteTextures(1, &t.name);
+    glDeleteTextures(1, &dataTex);
+    glDeleteProgram(prog);
+
+    float maxErr = 0.f;
+    int nonZero = 0;
+    ScratchArena arena;
+    for (int j = 0; j < kSamples; ++j) {
+        const float* d = &packed[size_t(j) * 20];
+        ShadingPoint sp = emittedShadingPoint(d);
+        const Vec3 wi(d[15], d[16], d[17]);
+        Closure cl;
+        mat->shade(sp, arena, cl);
+        Color3 f = test::query(cl, sp.wo, wi).f.total();
+        arena.reset();
+        for (int c = 0; c < 3; ++c) {
+            float err = std::abs(gpu[size_t(j) * 4 + size_t(c)] - f[c]) / std::max(std::abs(f[c]), kRelFloor);
+            maxErr = std::max(maxErr, std::isnan(err) ? 1e30f : err);
+            nonZero += f[c] > 1e-4f;
+        }
+    }
+    std::printf("PARITY ltc_normal_map module via manifest  max_rel_err %.3g  (non-zero channels %d)\n", maxErr, nonZero);
+    EXPECT_GT(nonZero, kSamples);
+    EXPECT_LE(maxErr, NodeRegistry::instance().find("bsdf.ltc_normal_map")->parityTolerance);
 }
 
 // specula_shading_inputs() derives the screen-space derivatives with dFdx/dFdy: for attributes

@@ -1,6 +1,10 @@
 // LTC normal-map prefilter (core/ltc/ltc_prefilter.h) against ltc-filtering.md §6: T12 (flat map = base table),
 // T13 (per-texel ground truth, naive and LEAN-iso baselines), T14 (90° rotation), determinism, cache, the node.
 #include "core/ltc/ltc_prefilter.h"
+#include "core/codegen/glsl_emitter.h"
+#include "core/codegen/glsl_manifest.h"
+#include "core/color/color_config.h"
+#include "core/io/image_io.h"
 
 #include "core/graph/graph_material.h"
 #include "core/ltc/ltc_tables.h"
@@ -10,6 +14,7 @@
 #include "core/texture/normal_map_gen.h"
 #include "tests/unit/test_support.h"
 
+#include <glm/gtc/packing.hpp>
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>
 
@@ -525,4 +530,65 @@ TEST(LtcNormalMapNode, GeneratedMapsFlatStrengthAndMirroredFrames) {
     // A missing texture store or a bad generator string is an input error.
     EXPECT_THROW(shade({{"normal_map", "some.png"}}, sp, arena, cl), std::exception);
     EXPECT_THROW(shade({{"normal_map", "generate:flakes:12:1"}}, sp, arena, cl), std::exception);
+}
+
+// The uniform literals reach prepare (PrepareContext::number): the tables are fitted for roughness 0.6 and strength
+// 0.5 when the material is compiled, and the GLSL export holds exactly those tables (level g of the 2D array = stored
+// level g + 1, each LTC premultiplied by its magnitude), written to the manifest as a layered resource.
+TEST(LtcNormalMapNode, PrepareFitsTheUniformLiteralsAndExportsTheTablesForGlsl) {
+    const nlohmann::json m = {{"nodes", {{"n", {{"type", "bsdf.ltc_normal_map"},
+                                               {"inputs", {{"normal_map", "generate:flakes:8:5"}, {"roughness", 0.6},
+                                                           {"strength", 0.5}}}}}}},
+                              {"output", "@n.bsdf"}};
+    graph::GraphDesc g = graph::parseGraph(m, "/materials/x");
+    codegen::GlslModule mod = codegen::emitGlsl(g);
+    ASSERT_EQ(mod.resources.size(), 4u);
+    EXPECT_EQ(mod.resources[0].glslType, "sampler2DArray");
+    EXPECT_EQ(mod.resources[0].file, "generate:flakes:8:5");
+    const std::vector<graph::ResourceImage> images = codegen::exportGlslResources(g, mod, GraphLoadContext{});
+    ASSERT_EQ(images.size(), 4u);
+    // The prefilter the node must have used: normals scaled by the strength, alpha = roughness².
+    std::vector<Vec3> n = NormalMapLtcPrefilter::normalsOf(generateNormalMap(NormalMapKind::Flakes, 8, 5));
+    for (Vec3& v : n) v = Vec3(v.x * 0.5f, v.y * 0.5f, v.z);
+    PrefilterSettings s;
+    s.alpha = 0.6f * 0.6f;
+    auto p = NormalMapLtcPrefilter::loadOrBuild(n, 8, s, NormalMapLtcPrefilter::defaultCacheDir());
+    const graph::ResourceImage& t = images[0];
+    ASSERT_EQ(t.levels.size(), 3u);  // stored levels 1..3: 4², 2², 1²
+    const int nSpec = s.specTheta * s.specPhi, nDiff = s.diffTheta * s.diffPhi, layers = 3 * (nSpec + nDiff);
+    size_t first = 0;
+    for (int l = 0; l < 3; ++l) {
+        const int w = 4 >> l;
+        ASSERT_EQ(t.levels[size_t(l)].width, w);
+        ASSERT_EQ(t.levels[size_t(l)].layers, layers);
+        ASSERT_EQ(t.levels[size_t(l)].rgba.size(), size_t(w) * w * layers * 4);
+        // Texel (w − 1, 0) of the level, the last specular view and the last diffuse view.
+        const size_t texel = size_t(w - 1), flat = first + texel;
+        for (int lobe = 0; lobe < 2; ++lobe) {
+            const int nv = lobe ? nDiff : nSpec, v = nv - 1;
+            const uint16_t* rec = &(lobe ? p->diffuseRecords() : p->specRecords())[(flat * size_t(nv) + size_t(v)) * 11];
+            const float mag = glm::unpackHalf1x16(rec[9]);
+            const int layer = 3 * ((lobe ? nSpec : 0) + v);
+            const float* px0 = &t.levels[size_t(l)].rgba[(size_t(layer) * w * w + texel) * 4];
+            const float* px2 = &t.levels[size_t(l)].rgba[(size_t(layer + 2) * w * w + texel) * 4];
+            EXPECT_EQ(px0[0], mag * glm::unpackHalf1x16(rec[0])) << "level " << l << " lobe " << lobe;
+            EXPECT_EQ(px2[0], mag * glm::unpackHalf1x16(rec[8]));
+            EXPECT_EQ(px2[1], mag);
+            EXPECT_EQ(px2[2], glm::unpackHalf1x16(rec[10]));
+        }
+        first += size_t(w) * w;
+    }
+    // normals: the clamped normals of level 0.
+    ASSERT_EQ(images[1].levels.size(), 1u);
+    EXPECT_EQ(images[1].levels[0].rgba[4 * 9 + 2], p->normals()[9].z);
+    // The manifest lists the layer count, and the level's EXR stacks the layers.
+    const std::string dir = test::tempDir("ltc-nm-manifest");
+    const nlohmann::json man = codegen::writeGlslResources(mod, images, dir, *ColorConfig::load("builtin"));
+    ASSERT_EQ(man["resources"].size(), 4u);
+    EXPECT_EQ(man["resources"][0]["glsl_type"], "sampler2DArray");
+    EXPECT_EQ(man["resources"][0]["levels"][0]["layers"], layers);
+    EXPECT_FALSE(man["resources"][1]["levels"][0].contains("layers"));
+    ImageSet exr = readImageSet(dir + "/" + man["resources"][0]["levels"][1]["exr"].get<std::string>());
+    EXPECT_EQ(exr.width, 2);
+    EXPECT_EQ(exr.height, 2 * layers);
 }

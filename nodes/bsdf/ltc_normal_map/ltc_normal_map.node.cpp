@@ -4,12 +4,15 @@
 
 #include "core/graph/closure_util.h"
 #include "core/graph/graph_material.h"
+#include "core/ltc/ltc_gpu.h"
 #include "core/ltc/ltc_prefilter.h"
 #include "core/ltc/ltc_tables.h"
 #include "core/texture/normal_map_gen.h"
 #include "core/texture/texture_store.h"
 #include "core/util/error.h"
 #include "nodes/shared/texture_ports.h"
+
+#include <glm/gtc/packing.hpp>
 
 #include <atomic>
 #include <cstring>
@@ -32,7 +35,9 @@ const NodeParams<Params> kParams = NodeParams<Params>()
     .str("normal_map",
          "tangent-space normal map, square with a power-of-two size, colour = (n + 1)/2, read as raw data (relative "
          "to the scene file); or 'generate:<kind>:<size>:<seed>' for a core/texture/normal_map_gen map")
-    .choice("convention", &Params::convention, "green channel: opengl = +Y up, directx = +Y down")
+    .choice("convention", &Params::convention,
+            "green channel: opengl = +Y up, directx = +Y down; one value per material (baked into the tables)")
+    .uniform()
     .f("roughness", &Params::roughness, 0.3f,
        "base GGX roughness of every texel, alpha = roughness^2; one value per material (the tables are fitted for it)")
     .range(0.1f, 1.f).hard(0.0316f, 1.f).uniform()
@@ -50,6 +55,10 @@ const NodeParams<Params> kParams = NodeParams<Params>()
 OutputList kOutputs;
 const OutPort<ClosureRef> kBsdf =
     kOutputs.add<ClosureRef>("bsdf", TypeDesc::Closure, "the specular and diffuse LTC lobes of the footprint");
+
+// The hard ranges of the uniform ports (a literal outside them is refused on load; the clamps keep odd callers safe).
+float clampRoughness(float r) { return std::min(std::max(r, 0.0316f), 1.f); }
+float clampStrength(float s) { return std::min(std::max(s, 0.f), 16.f); }
 
 // The prefilters already built in this process, by content hash (materials of one scene, and the many materials a
 // test suite loads for one map, share them). The last few are kept alive even when no material holds them.
@@ -73,8 +82,9 @@ std::shared_ptr<const ltc::NormalMapLtcPrefilter> sharedPrefilter(const std::vec
 }
 
 // Per instance: the decoded normals, and the tables for the (roughness, strength) the material uses. Both are uniform
-// ports, but a prepare step sees only string literals, so the tables are fitted (or read from the disk cache) on the
-// first shading point.
+// ports, so prepare reads their literals (PrepareContext::number) and fits the tables (or reads them from the disk
+// cache) before any shading point; the CPU and the GPU resources use that one prepared set. The list below only
+// serves a caller that evaluates other values than the prepared ones (a register overwritten after compile).
 struct Prepared {
     std::vector<Vec3> normals;  // bottom-up, OpenGL convention
     int size = 0;
@@ -85,6 +95,8 @@ struct Prepared {
     mutable std::atomic<const Built*> current{nullptr};
     mutable std::mutex mutex;
     mutable std::list<Built> built;  // never shrinks: 'current' points into it
+    const ltc::NormalMapLtcPrefilter* prepared = nullptr;  // the tables of the material's literals (fitted in prepare)
+    float roughness = 0.f, strength = 0.f;                 // those literals, clamped to the hard ranges
 
     const ltc::NormalMapLtcPrefilter& tables(float roughness, float strength) const {
         const Built* b = current.load(std::memory_order_acquire);
@@ -140,15 +152,109 @@ std::shared_ptr<const void> prepare(const PrepareContext& pc) {
     } catch (const std::exception& e) {
         throw InputError(pc.pointer("normal_map"), std::string("bsdf.ltc_normal_map: cannot load normal map: ") + e.what());
     }
+    // The clamps are cpu()'s (the hard ranges), so its fast path finds exactly these tables.
+    d->roughness = clampRoughness(pc.number("roughness"));
+    d->strength = clampStrength(pc.number("strength"));
+    try {
+        d->prepared = &d->tables(d->roughness, d->strength);
+    } catch (const std::exception& e) {
+        throw InputError(pc.pointer("normal_map"), std::string("bsdf.ltc_normal_map: cannot prefilter: ") + e.what());
+    }
     return d;
+}
+
+// ---- GPU resources (ltc_normal_map.glsl) ------------------------------------------------------------------------
+
+constexpr int kTexelsPerLtc = 3;  // RGBA layers per LTC: m0-3, m4-7, (m8, mag, fres, 0)
+
+// 'tables': the stored levels 1..L of the prefilter as one 2D array, GL level g = prefilter level g + 1 (so GL's
+// trilinear filter between two levels is the CPU's between two stored levels, ltc-filtering.md §5.3), texel (x, y)
+// of GL level g = texel (x, y) of prefilter level g + 1 (rows bottom-up, v = 0 first, as the prefilter stores them).
+// Layers: per specular view v (v = j·nφ + k) 3 layers from 3v, then per diffuse view 3 layers from 3·nSpec. Each LTC
+// is stored premultiplied by its magnitude, (mag·inv(M) normalised, mag, fres): the CPU's filter weights inv(M) by
+// filter weight × magnitude (accumulateStored), and a premultiplied texel makes the hardware's linear filter compute
+// exactly that sum (the products of two halves are exact in float). The θ ratio scales and the view weights are
+// applied in the shader per view, as the CPU does.
+graph::ResourceImage tablesImage(const void* prepared) {
+    const auto* d = static_cast<const Prepared*>(prepared);
+    const ltc::NormalMapLtcPrefilter& p = *d->prepared;
+    const ltc::PrefilterSettings& s = p.settings();
+    // The GLSL hard-codes the default view grids (SPC_LNM_*): other grids would be read with the wrong layers.
+    const ltc::PrefilterSettings def;
+    if (s.specTheta != def.specTheta || s.specPhi != def.specPhi || s.diffTheta != def.diffTheta || s.diffPhi != def.diffPhi)
+        throw std::logic_error("bsdf.ltc_normal_map: the GLSL reads only the default view grids (8x16, 2x4)");
+    const int nSpec = s.specTheta * s.specPhi, nDiff = s.diffTheta * s.diffPhi;
+    const int layers = kTexelsPerLtc * (nSpec + nDiff);
+    const int H = ltc::NormalMapLtcPrefilter::kRecordHalfs;
+    graph::ResourceImage img;
+    size_t levelFirst = 0;  // first stored texel of the level (levels are stored finest first)
+    for (int l = 1; l <= p.levels(); ++l) {
+        const int w = p.size() >> l;
+        graph::ResourceImage::Level lv;
+        lv.width = lv.height = w;
+        lv.layers = layers;
+        lv.rgba.assign(size_t(w) * w * layers * 4, 0.f);
+        for (int t = 0; t < w * w; ++t) {
+            const size_t flat = levelFirst + size_t(t);
+            for (int lobe = 0; lobe < 2; ++lobe) {
+                const int nv = lobe ? nDiff : nSpec;
+                const std::vector<uint16_t>& rec = lobe ? p.diffuseRecords() : p.specRecords();
+                for (int v = 0; v < nv; ++v) {
+                    const uint16_t* r = &rec[(flat * size_t(nv) + size_t(v)) * H];
+                    float x[12] = {};
+                    const float mag = glm::unpackHalf1x16(r[9]);
+                    for (int k = 0; k < 9; ++k) x[k] = mag * glm::unpackHalf1x16(r[k]);
+                    x[9] = mag;
+                    x[10] = glm::unpackHalf1x16(r[10]);
+                    const int layer0 = kTexelsPerLtc * ((lobe ? nSpec : 0) + v);
+                    for (int q = 0; q < kTexelsPerLtc; ++q)
+                        std::memcpy(&lv.rgba[((size_t(layer0 + q) * w * w) + size_t(t)) * 4], &x[4 * q], 4 * sizeof(float));
+                }
+            }
+        }
+        levelFirst += size_t(w) * w;
+        img.levels.push_back(std::move(lv));
+    }
+    if (img.levels.empty()) {  // a 1×1 map has no stored level: a zero texel keeps the sampler complete (never read)
+        graph::ResourceImage::Level lv;
+        lv.width = lv.height = 1;
+        lv.layers = layers;
+        lv.rgba.assign(size_t(layers) * 4, 0.f);
+        img.levels.push_back(std::move(lv));
+    }
+    img.minFilter = "linear_mipmap_linear";
+    img.magFilter = "linear";
+    img.wrapS = img.wrapT = "repeat";
+    return img;
+}
+
+// 'normals': the clamped unit normals of level 0 (the per-texel base LTCs of the finest footprints), read with
+// texelFetch (the shader wraps the indices itself, as the CPU does).
+graph::ResourceImage normalsImage(const void* prepared) {
+    const auto* d = static_cast<const Prepared*>(prepared);
+    const ltc::NormalMapLtcPrefilter& p = *d->prepared;
+    graph::ResourceImage img;
+    graph::ResourceImage::Level lv;
+    lv.width = lv.height = p.size();
+    lv.rgba.assign(size_t(p.size()) * p.size() * 4, 0.f);
+    for (size_t i = 0; i < p.normals().size(); ++i) {
+        const Vec3& n = p.normals()[i];
+        lv.rgba[i * 4 + 0] = n.x, lv.rgba[i * 4 + 1] = n.y, lv.rgba[i * 4 + 2] = n.z;
+    }
+    img.levels.push_back(std::move(lv));
+    img.minFilter = img.magFilter = "nearest";
+    img.wrapS = img.wrapT = "repeat";
+    return img;
 }
 
 void cpu(EvalContext& c, const Instr& i) {
     const auto* d = static_cast<const Prepared*>(i.data);
     const Params p = kParams.read(c, i);
     const ltc::LtcTables& base = ltc::builtinTables();
-    const ltc::NormalMapLtcPrefilter& pf =
-        d->tables(std::min(std::max(p.roughness, 0.0316f), 1.f), std::min(std::max(p.strength, 0.f), 16.f));
+    const float roughness = clampRoughness(p.roughness), strength = clampStrength(p.strength);
+    const ltc::NormalMapLtcPrefilter& pf = roughness == d->roughness && strength == d->strength
+                                               ? *d->prepared
+                                               : d->tables(roughness, strength);
     // The lobes live in the geometric tangent frame (T, N×T, N), always right-handed so polygon windings survive. The
     // map's +v is sign·(N×T): for sign < 0 the lookup sees wo mirrored in y, and the LTC is mirrored back on both
     // sides (S invM S with S = diag(1, −1, 1): the clamped cosine is symmetric in y, and det invM keeps its sign).
@@ -183,10 +289,13 @@ void reg(NodeRegistry& r) {
     s.category = "bsdf";
     s.doc = "Normal-mapped GGX (base roughness per texel) plus Lambert, filtered over the pixel footprint by prefiltered "
             "LTCs (Nahmias 2022; Student-t EM fits per MIP texel and view, ltc-filtering.md §5.3): one specular and one "
-            "diffuse LTC lobe in the geometric tangent frame; analytic under quad lights. Tables are fitted on the first "
-            "shading point (one fit per MIP texel and view; 128^2: 743k fits, ~20 s on 2 cores) and cached on disk by "
-            "content hash ($SPECULA_CACHE_DIR/ltc). CPU only: the GLSL function is a stub that returns no lobe (the "
-            "tables depend on the roughness, which a prepare step cannot read, so no GPU resource can hold them).";
+            "diffuse LTC lobe in the geometric tangent frame; analytic under quad lights. roughness and strength are "
+            "uniform (one value per material): the tables are fitted for them when the material is loaded (one fit per "
+            "MIP texel and view; 128^2: 743k fits, ~20 s on 2 cores) and cached on disk by content hash "
+            "($SPECULA_CACHE_DIR/ltc); the CPU and the GLSL read the same prepared tables (resources 'tables', "
+            "'normals', plus the base GGX tables), so a host must not change these two uniforms without re-exporting "
+            "the resources. GLSL: direction queries (f·cos = tint·magnitude·D_ltc per lobe) and polygon queries (the "
+            "LTC polygon integral, exact clip or clip-free, shared/ltc.glsl).";
     s.inputs = kParams.ports();
     s.outputs = kOutputs.ports();
     s.flags = kNeedsDerivatives;
@@ -194,6 +303,33 @@ void reg(NodeRegistry& r) {
     s.prepare = &prepare;
     s.glslFunction = "spc_bsdf_ltc_normal_map";
     s.glslFile = "bsdf/ltc_normal_map/ltc_normal_map.glsl";
+    s.glslLibraries = {"shared/ltc.glsl"};
+    // The default tolerance holds: both sides read the same prepared tables and filter them alike (GL trilinear =
+    // the CPU's texel-centre and MIP conventions), so only float rounding differs.
+    s.parityNote = "generated 16^2 map, uniform ports at their defaults, footprints spread over MIP levels -3..4: measured "
+                   "5.4e-6 (direction queries); an emitted module with other uniform literals 8.5e-6; polygon queries "
+                   "(test_glsl_ltc, quads and triangles) 2.7e-5 exact clip, 2.4e-5 clip-free";
+    {
+        const ltc::PrefilterSettings def;
+        const int layers = kTexelsPerLtc * (def.specTheta * def.specPhi + def.diffTheta * def.diffPhi);
+        ResourceSpec tables{"tables", "sampler2DArray", ResourceSpec::Kind::DerivedImage,
+                            "the prefiltered LTCs of MIP levels 1..log2(size) (GL level g = prefilter level g + 1; "
+                            "size/2 x size/2 at GL level 0), " + std::to_string(layers) +
+                                " layers: per view (8 x 16 specular, then 2 x 4 diffuse; v = theta index * n_phi + phi "
+                                "index) 3 layers (mag*inv(M)[0..3], mag*inv(M)[4..7], (mag*inv(M)[8], mag, fres, 0)), "
+                                "inv(M) in the view-aligned frame, unit Frobenius norm, premultiplied by its magnitude "
+                                "so the linear filter is the CPU's magnitude-weighted one; RGBA32F, "
+                                "linear_mipmap_linear, repeat (128^2: 64^2 x " + std::to_string(layers) +
+                                " texels at level 0, ~36 MB in all)",
+                            &tablesImage};
+        tables.fileInput = "normal_map";
+        ResourceSpec normals{"normals", "sampler2D", ResourceSpec::Kind::DerivedImage,
+                             "the map's clamped unit normals (xyz, 0) after strength and convention, rows bottom-up: "
+                             "the per-texel base GGX LTCs of MIP 0; RGBA32F, nearest, repeat, read with texelFetch",
+                             &normalsImage};
+        normals.fileInput = "normal_map";
+        s.resources = {std::move(tables), std::move(normals), ltc::matrixResource(), ltc::amplitudeResource()};
+    }
     r.add(std::move(s));
 }
 
