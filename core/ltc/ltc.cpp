@@ -257,17 +257,21 @@ bool samplePolygon(const Ltc& ltc, const Vec3* vertices, int n, const Vec2& u, u
     //     rejection from the projection's exact bounding box (acceptance π E / box area): small or overhead lights;
     // (b) a uniform point of the spherical polygon (triangle fan, Arvo 1995) kept with probability z / z_max
     //     (acceptance π E / (Ω z_max)): large or grazing polygons, e.g. thin crescents near the horizon.
-    double area[8], omega = 0;
-    for (int i = 1; i + 1 < k; ++i) {
-        double ar = vertexAngle(c[0], c[i], c[i + 1]) + vertexAngle(c[i], c[i + 1], c[0]) +
-                    vertexAngle(c[i + 1], c[0], c[i]) - kPiD;
-        area[i] = std::max(ar, 0.0);
-        omega += area[i];
-    }
+    // The fan's areas (and so (b)'s acceptance) are computed only when (a) is poor: most lights are small or overhead.
     const double accBox = kPiD * E / ((x1 - x0) * (y1 - y0));
-    const double accArvo = omega > 0.0 ? kPiD * E / (omega * zmax) : 0.0;
+    double area[8], omega = 0;
+    bool malley = true;
+    if (accBox < 0.3) {
+        for (int i = 1; i + 1 < k; ++i) {
+            double ar = vertexAngle(c[0], c[i], c[i + 1]) + vertexAngle(c[i], c[i + 1], c[0]) +
+                        vertexAngle(c[i + 1], c[0], c[i]) - kPiD;
+            area[i] = std::max(ar, 0.0);
+            omega += area[i];
+        }
+        const double accArvo = omega > 0.0 ? kPiD * E / (omega * zmax) : 0.0;
+        malley = accBox >= accArvo;
+    }
     const glm::dmat3 M = glm::inverse(m);
-    const bool malley = accBox >= accArvo;
     for (uint32_t t = 0; t < 4096; ++t) {
         double u0 = t == 0 ? double(u.x) : hashUniform(seed, t, 0), u1 = t == 0 ? double(u.y) : hashUniform(seed, t, 1);
         DVec3 p;

@@ -20,7 +20,8 @@ Integrator::Integrator(const Scene& scene, const Accel& accel)
       dimsPerBounce_(uint32_t(2 * scene.lights.size() + 4)),
       camera_(scene.camera, scene.render.width, scene.render.height),
       diffScale_(std::max(0.125f, 1.f / std::sqrt(float(std::max(scene.render.spp, 1))))),
-      ltcLights_(scene.render.areaLights == AreaLightMode::Ltc) {}
+      ltcLights_(scene.render.areaLights == AreaLightMode::Ltc),
+      ltcMaxDepth_(scene.render.ltcMaxDepth) {}
 
 Color3 Integrator::environment(const Vec3& dir) const {
     Color3 L(0.f);
@@ -176,7 +177,7 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
             BsdfQuery q;
             q.wo = wo;
             q.polygonHorizon = scene_.render.ltcHorizon;
-            if (ltcLights_ && li < kMaxAnalyticLights) {
+            if (ltcLights_ && depth <= ltcMaxDepth_ && li < kMaxAnalyticLights) {
                 Vec3 poly[4];
                 Color3 Lp;
                 int n = light.polygon(sp.pGeom, poly, Lp);

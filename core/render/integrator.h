@@ -47,6 +47,7 @@ private:
     PerspectiveCamera camera_;  // footprints of secondary vertices (PerspectiveCamera::approximateDpDxy)
     float diffScale_;           // the renderer's differential shrink, max(1/8, 1/sqrt(spp))
     bool ltcLights_;            // render.area_lights == "ltc": polygon lights integrated by the lobes that can
+    int ltcMaxDepth_;           // ... at path vertices up to this depth (0: camera hits), sampled deeper
 };
 
 }  // namespace specula

@@ -46,6 +46,10 @@ struct RenderSettings {
     // Hill & McGuire 2018) or sampled only; "ltc_horizon": exact clipping or the clip-free sphere approximation.
     AreaLightMode areaLights = AreaLightMode::Ltc;
     uint8_t ltcHorizon = 0;    // ltc::Horizon: 0 clip, 1 clipless
+    // "ltc_max_depth": the deepest path vertex (0 = the camera hit) that integrates quad lights analytically; deeper
+    // vertices sample them (their light is already noisy, and the analytic path costs a polygon sample and a shadow
+    // ray per lobe and light).
+    int ltcMaxDepth = 0;
     std::optional<CropWindow> crop;
 };
 

@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <vector>
 
 using namespace specula;
@@ -80,6 +81,7 @@ TEST(LtcEdges, RationalEdgeFactorMatchesAcosOverSine) {  // T5
         double exact = std::acos(x) / std::sqrt(1.0 - x * x) / (2.0 * M_PI);
         worst = std::max(worst, std::abs(rationalEdgeFactor(x) - exact) / exact);
     }
+    std::printf("T5: worst relative error of the rational edge factor %.2e (limit 2e-6)\n", worst);
     EXPECT_LT(worst, 2e-6);
 }
 
@@ -184,6 +186,9 @@ TEST(LtcEdges, ClipFreeAgreesWithExactClipping) {  // T7
     ASSERT_GT(straddling.size(), 500u);
     EXPECT_LE(worstAbove, 0.02);
     std::sort(straddling.begin(), straddling.end());
+    std::printf("T7: above the horizon worst %.4f|F| (%d quads); straddling (%zu) median %.4f p95 %.4f max %.4f |F|\n",
+                worstAbove, above, straddling.size(), straddling[straddling.size() / 2],
+                straddling[size_t(0.95 * straddling.size())], straddling.back());
     EXPECT_LE(straddling[straddling.size() / 2], 0.015);
     EXPECT_LE(straddling[size_t(0.95 * straddling.size())], 0.07);
     EXPECT_LE(straddling.back(), 0.13);
