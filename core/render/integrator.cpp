@@ -21,7 +21,8 @@ Integrator::Integrator(const Scene& scene, const Accel& accel)
       camera_(scene.camera, scene.render.width, scene.render.height),
       diffScale_(std::max(0.125f, 1.f / std::sqrt(float(std::max(scene.render.spp, 1))))),
       ltcLights_(scene.render.areaLights == AreaLightMode::Ltc),
-      ltcMaxDepth_(scene.render.ltcMaxDepth) {}
+      ltcMaxDepth_(scene.render.ltcMaxDepth),
+      ltcShadowRays_(std::max(1, scene.render.ltcShadowRays)) {}
 
 Color3 Integrator::environment(const Vec3& dir) const {
     Color3 L(0.f);
@@ -204,27 +205,39 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
                         }
                         return lightVisible == 1;
                     };
+                    // render.ltc_shadow_rays K per lobe: K directions whose first random pairs are one pair rotated by
+                    // k/K along the diagonal (Cranley-Patterson: each uniform, jointly stratified), visibility averaged.
+                    const int K = ltcShadowRays_;
                     int rank = 0;
                     for (int j = 0; j < closure.size(); ++j) {
                         if (!((analytic[li] >> j) & 1) || maxComponent(perLobe[j]) <= 0.f) continue;
                         const uint64_t key = (uint64_t(depth) << 40) ^ (uint64_t(li) << 8) ^ uint64_t(j);
-                        Vec2 uj = rank++ == 0 ? u
-                                              : Vec2(PixelSampler::unitFloat(sampler.bits(key * 2)),
-                                                     PixelSampler::unitFloat(sampler.bits(key * 2 + 1)));
-                        Vec3 wj;
-                        if (closure.samplePolygon(q, j, poly, n, uj, sampler.bits(~key), wj)) {
-                            if (glm::dot(wj, sp.ng) <= 0.f) continue;  // below the geometric surface, as sampled NEE
-                            float den = glm::dot(wj, lightNormal);
-                            if (den == 0.f) continue;
-                            LightSample lj;
-                            lj.wi = wj;
-                            lj.distance = glm::dot(poly[0], lightNormal) / den;
-                            if (!(lj.distance > 0.f) || accel_.occluded(shadowRay(sp, lj))) continue;
-                        } else if (!lightSampleVisible()) {
-                            continue;
+                        const Vec2 base = rank++ == 0 ? u
+                                                      : Vec2(PixelSampler::unitFloat(sampler.bits(key * 2)),
+                                                             PixelSampler::unitFloat(sampler.bits(key * 2 + 1)));
+                        int visible = 0;
+                        for (int k = 0; k < K; ++k) {
+                            const float shift = float(k) / float(K);
+                            Vec2 uj(base.x + shift, base.y + shift);
+                            uj -= glm::floor(uj);
+                            Vec3 wj;
+                            if (closure.samplePolygon(q, j, poly, n, uj, sampler.bits(~key + uint64_t(k) * 0x9E37ULL), wj)) {
+                                if (glm::dot(wj, sp.ng) <= 0.f) continue;  // below the geometric surface, as sampled NEE
+                                float den = glm::dot(wj, lightNormal);
+                                if (den == 0.f) continue;
+                                LightSample lj;
+                                lj.wi = wj;
+                                lj.distance = glm::dot(poly[0], lightNormal) / den;
+                                if (!(lj.distance > 0.f) || accel_.occluded(shadowRay(sp, lj))) continue;
+                            } else if (!lightSampleVisible()) {
+                                continue;
+                            }
+                            ++visible;
                         }
+                        if (visible == 0) continue;
                         BsdfEval fj;
-                        (closure.lobe(j)->kind() == LobeKind::Diffuse ? fj.diffuse : fj.specular) = perLobe[j];
+                        (closure.lobe(j)->kind() == LobeKind::Diffuse ? fj.diffuse : fj.specular) =
+                            perLobe[j] * (float(visible) / float(K));
                         addLightSample(out, beta, depth, fj, Lp, clamp);
                     }
                     // The lobes without a closed form: sampled next-event estimation with MIS, as for other lights.

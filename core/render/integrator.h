@@ -48,6 +48,7 @@ private:
     float diffScale_;           // the renderer's differential shrink, max(1/8, 1/sqrt(spp))
     bool ltcLights_;            // render.area_lights == "ltc": polygon lights integrated by the lobes that can
     int ltcMaxDepth_;           // ... at path vertices up to this depth (0: camera hits), sampled deeper
+    int ltcShadowRays_;         // shadow rays per analytic lobe and light (render.ltc_shadow_rays)
 };
 
 }  // namespace specula

@@ -50,6 +50,10 @@ struct RenderSettings {
     // vertices sample them (their light is already noisy, and the analytic path costs a polygon sample and a shadow
     // ray per lobe and light).
     int ltcMaxDepth = 0;
+    // "ltc_shadow_rays": visibility rays per analytic lobe and light (stratified), the shadow ratio's sample count. Two
+    // rays whose random pairs are half a period apart split the light between them: in penumbrae the 4-spp RMSE of
+    // the CI scene drops from 0.53x to 0.22x of sampled's (tests/unit/test_ltc_render.cpp).
+    int ltcShadowRays = 2;
     std::optional<CropWindow> crop;
 };
 

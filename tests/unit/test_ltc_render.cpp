@@ -12,6 +12,9 @@ using namespace specula;
 
 namespace {
 
+// render.ltc_shadow_rays of the scenes (the default; measured with 1: 0.53 at pixel centres, 0.56 jittered).
+const int kShadowRays = 2;
+
 // A large floor under a downward-facing quad light (out of the frame), with an optional small occluder 0.2 above the
 // floor that casts a shadow with a penumbra; the light crosses no horizon, the floor's edge is beyond the frame.
 std::string shadowScene(const std::string& material, bool occluder, int spp, const char* mode, int seed = 0) {
@@ -21,7 +24,8 @@ std::string shadowScene(const std::string& material, bool occluder, int spp, con
     shapes += "]";
     return R"({
         "render": {"width": 32, "height": 24, "spp": )" + std::to_string(spp) + R"(, "integrator": "direct", "seed": )" +
-           std::to_string(seed) + R"(, "area_lights": ")" + mode + R"("},
+           std::to_string(seed) + R"(, "area_lights": ")" + mode + R"(", "ltc_shadow_rays": )" +
+           std::to_string(kShadowRays) + R"(},
         "camera": {"position": [0, -2, 1.8], "look_at": [0.3, 0.3, 0], "fov": 40},
         "materials": {"m": )" + material + R"(},
         "shapes": )" + shapes + R"(,
@@ -85,7 +89,7 @@ TEST(LtcRender, ShadowedLtcConvergesToSampledAndIsLessNoisy) {
         const double ratio = rmse(l4, ref) / rmse(s4, ref);
         std::printf("%s: 4-spp RMSE ltc %.5f sampled %.5f ratio %.3f; 4096-spp ltc-vs-sampled %.5f, noise floor %.5f\n",
                     centres ? "pixel centres" : "jittered", rmse(l4, ref), rmse(s4, ref), ratio, diff, noise);
-        EXPECT_LE(ratio, centres ? 0.5 : 0.65);
+        EXPECT_LE(ratio, centres ? 0.35 : 0.55);  // measured 0.223 / 0.437 (issue 10 asks <= 0.5)
     }
 }
 
