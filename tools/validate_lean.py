@@ -14,12 +14,11 @@ import argparse
 import math
 import os
 import shlex
-import subprocess
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from specula_validation import metrics  # noqa: E402
-from specula_validation.render import Renderer  # noqa: E402
+from specula_validation.render import Renderer, run_logged, tiled_uv_nodes  # noqa: E402
 
 MAP_SIZE = 256
 ROUGHNESS = 0.2
@@ -27,22 +26,11 @@ METHODS = ["naive", "lean_norho", "lean"]
 LABEL = {"reference": "reference", "naive": "naive MIP normals", "lean_norho": "LEAN without ρ", "lean": "LEAN with ρ"}
 
 
-def run(cmd, log):
-    log.append(" ".join(shlex.quote(c) for c in cmd))
-    r = subprocess.run(cmd, capture_output=True, text=True)
-    if r.returncode != 0:
-        sys.exit("command failed (%d): %s\n%s%s" % (r.returncode, log[-1], r.stdout, r.stderr))
-    return r.stdout
+run = run_logged  # the toolkit's (every command goes into the page's log)
 
 
 def material(method, mapfile, tiles):
-    nodes = {
-        "uvs": {"type": "geometry.uv"},
-        "uv": {"type": "math.mul.vec2", "inputs": {"a": "@uvs.uv", "b": tiles}},
-        "dx": {"type": "math.mul.vec2", "inputs": {"a": "@uvs.duvdx", "b": tiles}},
-        "dy": {"type": "math.mul.vec2", "inputs": {"a": "@uvs.duvdy", "b": tiles}},
-    }
-    look = {"uv": "@uv.out", "duvdx": "@dx.out", "duvdy": "@dy.out"}
+    nodes, look = tiled_uv_nodes(tiles)
     if method == "naive":
         nodes["img"] = {"type": "texture.image", "inputs": dict(file=mapfile, colorspace="raw", **look)}
         nodes["nm"] = {"type": "texture.normal_map", "inputs": {"color": "@img.color"}}

@@ -11,17 +11,13 @@ toolkit (tools/specula_validation/, docs/validation/README.md).
 """
 import argparse
 import json
-import math
 import os
-import re
-import shlex
-import subprocess
 import sys
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from specula_validation import metrics  # noqa: E402
-from specula_validation.render import Renderer  # noqa: E402
+from specula_validation.render import Renderer, run_logged, tiled_uv_nodes  # noqa: E402
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
 MAPS = {"STONE": "stone", "GLITTER": "flakes", "SCRATCH": "scratches"}
@@ -32,26 +28,14 @@ LABEL = {"reference": "reference (full-res normals, GGX, 256 spp)", "naive": "na
          "lean": "LEAN (Beckmann, MIP moments)", "prefiltered": "prefiltered LTC (t-EM)"}
 
 
-def run(cmd, log, env=None):
-    log.append(" ".join(shlex.quote(os.path.relpath(c, ROOT) if os.path.isabs(c) and c.startswith(ROOT) else c)
-                        for c in cmd))
-    r = subprocess.run(cmd, capture_output=True, text=True, env=env)
-    if r.returncode != 0:
-        sys.exit("command failed (%d): %s\n%s%s" % (r.returncode, log[-1], r.stdout, r.stderr))
-    return r.stdout
+run = run_logged  # the toolkit's (every command goes into the page's log)
 
 
 # ---- scenes --------------------------------------------------------------------------------------------------------
 
 def nm_material(method, mapfile, tiles):
     """Specular-only materials (the specular AOV is compared): GGX with F0 0.9 on every texel."""
-    nodes = {
-        "uvs": {"type": "geometry.uv"},
-        "uv": {"type": "math.mul.vec2", "inputs": {"a": "@uvs.uv", "b": tiles}},
-        "dx": {"type": "math.mul.vec2", "inputs": {"a": "@uvs.duvdx", "b": tiles}},
-        "dy": {"type": "math.mul.vec2", "inputs": {"a": "@uvs.duvdy", "b": tiles}},
-    }
-    look = {"uv": "@uv.out", "duvdx": "@dx.out", "duvdy": "@dy.out"}
+    nodes, look = tiled_uv_nodes(tiles)
     if method in ("reference", "naive"):
         inputs = {"file": mapfile, "colorspace": "raw", "uv": "@uv.out"}
         if method == "naive":  # OIIO's MIP/anisotropic filtering of the encoded normals over the footprint

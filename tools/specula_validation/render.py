@@ -92,3 +92,26 @@ class Renderer:
             js = scene
         cmd = [self.specula, "render", js, "--print-camera", *overrides_args(None, resolution, None, shift_px)]
         return json.loads(subprocess.run(cmd, capture_output=True, text=True, check=True).stdout)
+
+
+def run_logged(cmd, log, env=None):
+    """Runs a command line (any tool: specula, normalmap, ltc-report, a bench), appends it to 'log' for the page, and
+    exits with its output when it fails. Returns stdout."""
+    log.append(" ".join(shlex.quote(os.path.relpath(c, ROOT) if os.path.isabs(c) and c.startswith(ROOT) else c)
+                        for c in cmd))
+    r = subprocess.run(cmd, capture_output=True, text=True, env=env)
+    if r.returncode != 0:
+        raise SystemExit("command failed (%d): %s\n%s%s" % (r.returncode, log[-1], r.stdout, r.stderr))
+    return r.stdout
+
+
+def tiled_uv_nodes(tiles):
+    """Graph nodes for uv scaled by 'tiles' with its footprint (duv/dx, duv/dy) scaled the same, and the inputs that
+    wire them into a texture or BSDF node ({"uv", "duvdx", "duvdy"})."""
+    nodes = {
+        "uvs": {"type": "geometry.uv"},
+        "uv": {"type": "math.mul.vec2", "inputs": {"a": "@uvs.uv", "b": tiles}},
+        "dx": {"type": "math.mul.vec2", "inputs": {"a": "@uvs.duvdx", "b": tiles}},
+        "dy": {"type": "math.mul.vec2", "inputs": {"a": "@uvs.duvdy", "b": tiles}},
+    }
+    return nodes, {"uv": "@uv.out", "duvdx": "@dx.out", "duvdy": "@dy.out"}
