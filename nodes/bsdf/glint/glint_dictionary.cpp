@@ -6,6 +6,7 @@
 
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -107,8 +108,61 @@ Dictionary Dictionary::generate() {
         for (int k = 0; k < kLevels; ++k)
             std::memcpy(dict.data_.data() + (size_t(k) * kMarginals + d) * kRowFloats,
                         perMarginal.data() + (size_t(d) * kLevels + k) * kRowFloats, kRowFloats * sizeof(float));
+    dict.buildCdf();
     dict.seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return dict;
+}
+
+// C[i] = mass over [0, x_i] at the texel centres x_i = (i + 1/2) Delta, in double: the half texel [0, x_0] is flat at
+// p_0 (the mirror of texel 0), each segment between centres is linear, and [x_63, 4 sigma_o] is flat at p_63.
+void Dictionary::buildCdf() {
+    cdf_.assign(size_t(kLevels) * kMarginals * (kRes + 1), 0.f);
+    for (int k = 0; k < kLevels; ++k)
+        for (int d = 0; d < kMarginals; ++d) {
+            const float* p = row(k, d);
+            float* c = cdf_.data() + (size_t(k) * kMarginals + d) * (kRes + 1);
+            double acc = 0.5 * kDelta * p[0];
+            c[0] = float(acc);
+            for (int i = 0; i + 1 < kRes; ++i) {
+                acc += 0.5 * kDelta * (double(p[i]) + double(p[i + 1]));
+                c[i + 1] = float(acc);
+            }
+            acc += 0.5 * kDelta * p[kRes - 1];
+            c[kRes] = float(acc);
+        }
+}
+
+float Dictionary::marginalCdf(int level, int marginal, float x) const {
+    const float ax = std::abs(x), sign = x < 0.f ? -1.f : 1.f;
+    const float* p = row(level, marginal);
+    const float* c = cdfNodes(level, marginal);
+    const float delta = float(kDelta);
+    const float t = ax / delta - 0.5f;  // position in texel-centre units
+    if (t <= 0.f) return sign * p[0] * ax;
+    if (t >= float(kRes - 1)) return sign * std::min(c[kRes - 1] + p[kRes - 1] * (ax - (kRes - 0.5f) * delta), c[kRes]);
+    const int i = int(t);
+    const float f = t - float(i);
+    return sign * (c[i] + delta * f * (p[i] + 0.5f * (p[i + 1] - p[i]) * f));
+}
+
+float Dictionary::sampleMarginal(int level, int marginal, float u) const {
+    const float* p = row(level, marginal);
+    const float* c = cdfNodes(level, marginal);
+    const float delta = float(kDelta);
+    const float target = std::clamp(u, 0.f, 1.f) * c[kRes];  // c[kRes] = 1/2 up to rounding
+    if (target <= c[0]) return p[0] > 0.f ? target / p[0] : 0.5f * delta;
+    if (target >= c[kRes - 1]) {
+        const float x0 = (kRes - 0.5f) * delta;
+        return p[kRes - 1] > 0.f ? std::min(x0 + (target - c[kRes - 1]) / p[kRes - 1], float(4.0 * kSigmaO)) : x0;
+    }
+    // Segment i with c[i] < target <= c[i+1] (c is non-decreasing; zero-mass segments are skipped by the search).
+    const int i = int(std::upper_bound(c, c + kRes, target) - c) - 1;
+    const float r = (target - c[i]) / delta, dp = p[i + 1] - p[i];
+    // Solve p_i f + dp f^2 / 2 = r in the stable form f = 2r / (p_i + sqrt(p_i^2 + 2 dp r)).
+    const float disc = std::sqrt(std::max(p[i] * p[i] + 2.f * dp * r, 0.f));
+    const float den = p[i] + disc;
+    const float f = den > 0.f ? std::clamp(2.f * r / den, 0.f, 1.f) : 0.5f;
+    return (float(i) + 0.5f + f) * delta;
 }
 
 uint64_t Dictionary::hash() const { return fnv1a(data_.data(), data_.size() * sizeof(float)); }
@@ -149,6 +203,7 @@ const Dictionary& Dictionary::instance() {
                 in.read(reinterpret_cast<char*>(buf.data()), std::streamsize(n * sizeof(float))) &&
                 fnv1a(buf.data(), n * sizeof(float)) == stored) {
                 dict.data_ = std::move(buf);
+                dict.buildCdf();
                 dict.fromCache_ = true;
                 dict.seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
                 return;

@@ -76,11 +76,25 @@ public:
     std::vector<float> gpuMipRgba(int m) const;
     static constexpr int kGpuLayers = kLevels * kMarginals / 3;  // 1024
 
+    // Cumulative mass of the unfiltered marginal (MIP 0 under the GL_LINEAR + mirrored-repeat reconstruction that
+    // sampleLinear reads), in slope units: marginalCdf(k, d, x) = integral of p_{d,k}(|x'|) over x' in [0, x], an odd
+    // function of x with limit +-1/2 at |x| >= 4 sigma_o. The mass over [a, b] is cdf(b) - cdf(a): what integrating a
+    // cell's separable slope distribution over a box needs (area lights), and what sampling a cell inverts.
+    float marginalCdf(int level, int marginal, float x) const;
+    // The inverse on the half line: x >= 0 with marginalCdf(k, d, x) = u / 2, for u in [0, 1).
+    float sampleMarginal(int level, int marginal, float u) const;
+    // Cumulative mass at the 64 texel centres and at 4 sigma_o (65 floats) of (level, marginal).
+    const float* cdfNodes(int level, int marginal) const {
+        return cdf_.data() + (size_t(level) * kMarginals + size_t(marginal)) * (kRes + 1);
+    }
+
     double generationSeconds() const { return seconds_; }
     bool fromCache() const { return fromCache_; }
 
 private:
+    void buildCdf();
     std::vector<float> data_;
+    std::vector<float> cdf_;
     double seconds_ = 0.0;
     bool fromCache_ = false;
 };
