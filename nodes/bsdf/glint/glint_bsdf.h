@@ -206,8 +206,11 @@ inline float cellSdf(const SdfQuery& q, int l, int s, int t) {
     return q.shape.detMinv * px * py;  // C21 Eq. 4 / Eq. 15
 }
 
-// S3: EWA footprint-to-cell weights W_P over integer cells at level l (pbrt-v3 / Heckbert), normalised.
-inline float levelSdf(const SdfQuery& q, int l, Vec2 uv, Vec2 a1, Vec2 a2, int* visited = nullptr) {
+// S3: EWA footprint-to-cell weights W_P over integer cells at level l (pbrt-v3 / Heckbert). Calls
+// visit(s, t, W) for every cell inside the ellipse (at most kCellCap; further cells are counted in cellCapHits) and
+// returns how many were visited. Shared by the point evaluation (levelSdf) and the area-light integral.
+template <class Visit>
+inline int forEachCell(int l, Vec2 uv, Vec2 a1, Vec2 a2, Visit&& visit) {
     const float n = float(1 << (kLevels - 1 - l));  // cells per UV unit
     const float cs = uv.x * n - 0.5f, ct = uv.y * n - 0.5f;
     const Vec2 b1 = a1 * n, b2 = a2 * n;
@@ -222,7 +225,6 @@ inline float levelSdf(const SdfQuery& q, int l, Vec2 uv, Vec2 a1, Vec2 a2, int* 
     const int s0 = int(std::ceil(cs - su)), s1 = int(std::floor(cs + su));
     const int t0 = int(std::ceil(ct - sv)), t1 = int(std::floor(ct + sv));
     const float e2 = 0.13533528f;  // e^-2
-    float sumW = 0.f, sumWP = 0.f;
     int count = 0;
     for (int t = t0; t <= t1; ++t) {
         const float dt = float(t) - ct;
@@ -232,15 +234,22 @@ inline float levelSdf(const SdfQuery& q, int l, Vec2 uv, Vec2 a1, Vec2 a2, int* 
             if (!(r2 < 1.f)) continue;
             if (count >= kCellCap) {
                 cellCapHits().fetch_add(1, std::memory_order_relaxed);
-                goto done;
+                return count;
             }
             ++count;
-            const float W = std::exp(-2.f * r2) - e2;
-            sumW += W;
-            sumWP += W * cellSdf(q, l, s, t);
+            visit(s, t, std::exp(-2.f * r2) - e2);
         }
     }
-done:
+    return count;
+}
+
+// The normalised EWA average of the cells' SDFs at level l (spec S3 step 6).
+inline float levelSdf(const SdfQuery& q, int l, Vec2 uv, Vec2 a1, Vec2 a2, int* visited = nullptr) {
+    float sumW = 0.f, sumWP = 0.f;
+    const int count = forEachCell(l, uv, a1, a2, [&](int s, int t, float W) {
+        sumW += W;
+        sumWP += W * cellSdf(q, l, s, t);
+    });
     if (visited) *visited = count;
     return sumW > 0.f ? sumWP / sumW : 0.f;
 }
