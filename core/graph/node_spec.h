@@ -216,7 +216,7 @@ struct NodeSpec {
 
 // ---- flat instruction list ---------------------------------------------------------------------
 constexpr int kMaxInputs = 24;  // bsdf.glint has 20 inputs
-constexpr int kMaxOutputs = 4;
+constexpr int kMaxOutputs = 6;  // geometry.uv has 5 (uv, sample and pixel footprints); usedOutputs holds 8 bits
 constexpr uint16_t kNoRegister = 0xFFFF;
 
 // One compiled node: entry point + register offsets. For string ports in[k] is unused (kNoRegister),
