@@ -1,14 +1,18 @@
 #!/usr/bin/env python3
-"""Writes the showcase environment maps (examples/showcase/*.hdr): equirectangular, z-up, Blender's column convention
-(docs/scene-format.md, environment). Deterministic and procedural, so the repository ships no third-party HDRIs:
+"""Writes the showcase assets of examples/showcase/: environment maps (*.hdr: equirectangular, z-up, Blender's column
+convention, docs/scene-format.md) and a mesh. Deterministic and procedural, so the repository ships no third-party
+HDRIs or models:
   studio.hdr  a dark photo studio: a large overhead softbox, two vertical strip boxes, a warm kicker, a floor bounce.
   sky.hdr     a clear winter sky for a low sun (the sun itself is a directional light in the scenes): zenith blue,
               bright hazy horizon, a warm glow around the sun's azimuth, a grey-white snow ground below the horizon.
-Usage: python3 tools/make_showcase_env.py [--out examples/showcase]"""
+  body.obj    a smooth car-body-like superellipsoid (2.4 x 1.2 x 0.7, flat-ish top and sides, rounded edges) with
+              analytic normals and (u, v) = (azimuth, polar) parameters, for the car-paint showcase.
+Usage: python3 tools/make_showcase_assets.py [--out examples/showcase]"""
+
 import argparse
 import math
 import os
-import struct
+
 
 W, H = 512, 256
 
@@ -99,6 +103,52 @@ def write_hdr(path, fn):
     os.replace(tmp, path)
 
 
+def write_body(path, nu=96, nv=48, size=(1.2, 0.6, 0.35), e_long=0.45, e_lat=0.6):
+    """Superellipsoid x = a c(v)^e1 c(u)^e2 ...: signed powers of cos/sin. Normals from the implicit function's gradient
+    F = ((x/a)^(2/e2) + (y/b)^(2/e2))^(e2/e1) + (z/c)^(2/e1)."""
+    a, b, c = size
+
+    def spow(x, e):
+        return math.copysign(abs(x) ** e, x)
+
+    verts, norms, uvs = [], [], []
+    for j in range(nv + 1):
+        v = j / nv
+        th = -0.5 * math.pi + v * math.pi
+        for i in range(nu + 1):
+            u = i / nu
+            ph = -math.pi + u * 2.0 * math.pi
+            x = a * spow(math.cos(th), e_lat) * spow(math.cos(ph), e_long)
+            y = b * spow(math.cos(th), e_lat) * spow(math.sin(ph), e_long)
+            z = c * spow(math.sin(th), e_lat)
+            # gradient of F (up to a positive factor per point)
+            gx = spow(x / a, 2.0 / e_long - 1.0) / a
+            gy = spow(y / b, 2.0 / e_long - 1.0) / b
+            r = (abs(x / a) ** (2.0 / e_long) + abs(y / b) ** (2.0 / e_long))
+            k = (r ** (e_long / e_lat - 1.0)) if r > 0 else 0.0
+            gx, gy = gx * k, gy * k
+            gz = spow(z / c, 2.0 / e_lat - 1.0) / c
+            n = math.sqrt(gx * gx + gy * gy + gz * gz)
+            if n < 1e-12:
+                gx, gy, gz, n = 0.0, 0.0, math.copysign(1.0, z if z else th), 1.0
+            verts.append((x, y, z + c))
+            norms.append((gx / n, gy / n, gz / n))
+            uvs.append((u, v))
+    lines = ["# Specula showcase body (tools/make_showcase_assets.py)"]
+    lines += ["v %.5f %.5f %.5f" % p for p in verts]
+    lines += ["vn %.4f %.4f %.4f" % p for p in norms]
+    lines += ["vt %.5f %.5f" % p for p in uvs]
+    w = nu + 1
+    for j in range(nv):
+        for i in range(nu):
+            q = [j * w + i + 1, j * w + i + 2, (j + 1) * w + i + 2, (j + 1) * w + i + 1]
+            lines.append("f " + " ".join("%d/%d/%d" % (k, k, k) for k in q))
+    tmp = path + ".tmp"
+    with open(tmp, "w") as f:
+        f.write("\n".join(lines) + "\n")
+    os.replace(tmp, path)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--out", default=os.path.join(os.path.dirname(__file__), "..", "examples", "showcase"))
@@ -106,7 +156,8 @@ def main():
     os.makedirs(a.out, exist_ok=True)
     write_hdr(os.path.join(a.out, "studio.hdr"), studio)
     write_hdr(os.path.join(a.out, "sky.hdr"), sky)
-    print("wrote studio.hdr and sky.hdr to", os.path.abspath(a.out))
+    write_body(os.path.join(a.out, "body.obj"))
+    print("wrote studio.hdr, sky.hdr and body.obj to", os.path.abspath(a.out))
 
 
 if __name__ == "__main__":
