@@ -66,7 +66,7 @@ def studio(d):
     return r, g, b
 
 
-def sky(d, sun_azimuth=math.radians(111.0)):
+def sky(d, sun_azimuth=math.radians(105.0)):
     z = d[2]
     if z < 0.0:  # snow-covered ground, lit by the sky
         k = 0.55 + 0.15 * math.exp(8.0 * z)

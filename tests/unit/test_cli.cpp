@@ -300,7 +300,7 @@ TEST(Cli, BsdfDrivesTheShadingPointAndBatches) {
 // specula plot --raw writes the lobe panel's float values: a pixel equals specula bsdf for its direction.
 TEST(Cli, PlotRawValuesEqualBsdfQueries) {
     std::string dir = test::tempDir("cli-plot");
-    const std::string demo = test::sourcePath("examples/demo.json");
+    const std::string demo = test::sourcePath("examples/metals.json");
     std::string out;
     ASSERT_EQ(test::runCli("plot " + q(demo) + " --material copper_satin --wo 0.4,0,0.9 --size 64 -o " + q(dir + "/p.png") +
                                " --raw " + q(dir + "/p.exr"),
