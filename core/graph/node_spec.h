@@ -209,7 +209,7 @@ struct NodeSpec {
 };
 
 // ---- flat instruction list ---------------------------------------------------------------------
-constexpr int kMaxInputs = 24;  // bsdf.glint has 20 inputs
+constexpr int kMaxInputs = 32;  // bsdf.glint has 25 inputs (20 + the fresnelPorts() group and base_color)
 constexpr int kMaxOutputs = 4;
 constexpr uint16_t kNoRegister = 0xFFFF;
 
