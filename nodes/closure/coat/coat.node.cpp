@@ -56,9 +56,14 @@ void reg(NodeRegistry& r) {
     NodeSpec s;
     s.id = "closure.coat";
     s.category = "closure";
-    s.doc = "Clear coat over a closure: weight · dielectric GGX coat (exact Fresnel, α = roughness²) + "
-            "lerp(1, tint·(1 − E(μo)), weight) · base, E the coat's tabulated directional albedo (energy-conserving "
-            "albedo scaling, OpenPBR / MaterialX layer). Quad lights: the coat lobe's LTC (as bsdf.ggx).";
+    s.doc = "Clear coat over a closure (car paint: coat over base + flakes): weight · dielectric GGX coat (exact "
+            "Fresnel, α = roughness²) + lerp(1, tint·(1 − E(μo)), weight) · base, E(μo, roughness, ior) the coat's "
+            "directional albedo, tabulated (32 μo × 32 roughness × 16 F0 nodes, ior 1..3) by quadrature at first use "
+            "(energy-conserving albedo scaling as OpenPBR / MaterialX layer: a white base keeps albedo 1, measured "
+            "within 0.4 % for μo 0.1..1; table vs Monte Carlo within 0.21 % absolute). weight 0 is the base exactly; "
+            "for tint 1 the base scale is 1 − weight·E. 'normal' is the coat's own (the shading normal by default), so "
+            "a flake normal map can sit under a smooth coat. Not reciprocal (the scale depends on wo, as in every "
+            "albedo-scaling layer). Quad lights: the coat lobe's LTC (as bsdf.ggx) plus the scaled base's answers.";
     s.inputs = kParams.ports();
     s.outputs = kOutputs.ports();
     s.cpu = &cpu;
