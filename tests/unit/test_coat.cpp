@@ -4,8 +4,10 @@
 #include "core/graph/graph_material.h"
 #include "core/render/lobes/ggx.h"
 #include "core/render/material.h"
+#include "core/render/renderer.h"
 #include "core/render/sampling.h"
 #include "core/render/shading.h"
+#include "core/scene/scene_loader.h"
 #include "nodes/closure/coat/coat_albedo.h"
 #include "tests/unit/test_support.h"
 
@@ -257,6 +259,38 @@ TEST(Coat, PolygonQueriesPassThrough) {
     EXPECT_NEAR(all.total().x, baseOnly.total().x * scale + 0.8f * coatPart.x, 1e-5f);
     EXPECT_GT(coatPart.x, 0.f);
     std::printf("COAT polygon: base %.5f x %.4f + coat %.5f\n", baseOnly.total().x, scale, 0.8f * coatPart.x);
+}
+
+// The rendered white furnace (as tests/unit/test_render_physics.cpp): a coated white sphere in a constant environment
+// returns the environment, at the centre (μo ≈ 1) and in the outer ring (grazing views, μo down to ~0.2).
+TEST(Coat, RenderedWhiteFurnaceReturnsTheEnvironment) {
+    Scene s = loadSceneFromString(R"({
+        "render": {"width": 48, "height": 48, "spp": 64, "integrator": "path"},
+        "camera": {"position": [0, -4, 0], "look_at": [0, 0, 0], "fov": 30},
+        "materials": {"coat": {"nodes": {"d": {"type": "bsdf.diffuse", "inputs": {"color": 1.0}},
+                                         "c": {"type": "closure.coat", "inputs": {"base": "@d.bsdf", "roughness": 0.3, "ior": 1.5}}},
+                               "output": "@c.bsdf"}},
+        "shapes": [{"type": "sphere", "radius": 1, "material": "coat"}],
+        "lights": [{"type": "environment", "color": [0.7, 0.7, 0.7]}]})",
+                                  test::sourcePath("examples"));
+    RenderOutput r = renderScene(s);
+    const AovBuffer* beauty = r.images.find("beauty");
+    ASSERT_TRUE(beauty);
+    double inner = 0, outer = 0;
+    int ni = 0, no = 0;
+    for (int y = 0; y < 48; ++y)
+        for (int x = 0; x < 48; ++x) {
+            const double d = std::hypot(x + 0.5 - 24.0, y + 0.5 - 24.0);  // the sphere's silhouette is at ~22 px
+            const double v = beauty->pixels[(size_t(y) * 48 + x) * 3 + 1] / 0.7;
+            if (d < 12.0) inner += v, ++ni;
+            else if (d > 16.0 && d < 20.0) outer += v, ++no;
+        }
+    ASSERT_GT(ni, 300);
+    ASSERT_GT(no, 300);
+    std::printf("COAT rendered furnace: centre %.4f, outer ring %.4f (environment = 1)\n", inner / ni, outer / no);
+    EXPECT_NEAR(inner / ni, 1.0, 0.01);
+    EXPECT_NEAR(outer / no, 1.0, 0.01);
+    EXPECT_EQ(r.stats.invalidSamples, 0u);
 }
 
 }  // namespace
