@@ -1,10 +1,14 @@
 // Glint BRDF CPU cost (nodes/bsdf/glint): eval with GGAA off and on against GGX on identical inputs in one run, the
 // GGAA overhead (C21 Table 1 reports 0.6-4.2 % on a GPU; spec §4.11 budget ~10 %), and dictionary/pyramid memory.
+// Two granularities: one evaluation of a fresh shading point (glintFCosScalar: the footprint's cells built, then one
+// query; the per-query pipeline glintFCosReference beside it), and one renderer shading point with one light
+// (GlintLobe: light evalPdf + sample + evalPdf of the sample, the cells shared by the three; GGX lobe the same).
 #include "core/render/lobes/ggx.h"
 #include "nodes/bsdf/glint/glint_bsdf.h"
 
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <random>
@@ -64,6 +68,39 @@ float runGlint(bool ggaa, size_t& i) {
     return glintFCosScalar(d, p, shape, k.in, k.wo, k.wi);
 }
 
+float runGlintReference(bool ggaa, size_t& i) {
+    static const Dictionary& d = Dictionary::instance();
+    const GlintParams p = params(ggaa);
+    const GlintShape shape = GlintShape::make(p.sigmaX, p.sigmaY, p.rho);
+    const Case& k = cases()[i++ & 4095];
+    return glintFCosReference(d, p, shape, k.in, k.wo, k.wi);
+}
+
+// One shading point of the renderer with one light: NEE evalPdf, the BSDF sample, the evalPdf of the sample (MIS).
+template <class Lobe>
+float shadingPoint(const Lobe& lobe, const Case& k, size_t i) {
+    const LobeValue a = lobe.evalPdf(LobeQuery{k.wo, k.wi});
+    Vec3 wi;
+    const float u1 = float((i * 0x9E3779B1u) >> 8 & 0xffffff) * 0x1p-24f, u2 = float((i * 0x85EBCA77u) >> 8 & 0xffffff) * 0x1p-24f;
+    float r = a.f.x + a.pdf;
+    if (lobe.sample(LobeQuery{k.wo, k.wo}, Vec2(u1, u2), wi)) {
+        const LobeValue b = lobe.evalPdf(LobeQuery{k.wo, wi});
+        r += b.f.x + b.pdf;
+    }
+    return r;
+}
+float runGlintShadingPoint(bool ggaa, size_t& i) {
+    static const Dictionary& d = Dictionary::instance();
+    const Case& k = cases()[i & 4095];
+    const GlintLobe lobe(d, params(ggaa), k.in, Fresnel::one());
+    return shadingPoint(lobe, k, i++);
+}
+float runGgxShadingPoint(size_t& i) {
+    static const GgxLobe lobe(0.2263f, 0.2263f, Fresnel::one());
+    const Case& k = cases()[i & 4095];
+    return shadingPoint(lobe, k, i++);
+}
+
 float runGgx(size_t& i) {
     static const GgxLobe lobe(0.2263f, 0.2263f, Fresnel::one());  // alpha = sqrt(2) sigma
     const Case& k = cases()[i++ & 4095];
@@ -82,9 +119,24 @@ void BM_GlintGgaa(benchmark::State& st) {
     size_t i = 0;
     for (auto _ : st) benchmark::DoNotOptimize(runGlint(true, i));
 }
+void BM_GlintReferenceGgaa(benchmark::State& st) {
+    size_t i = 0;
+    for (auto _ : st) benchmark::DoNotOptimize(runGlintReference(true, i));
+}
+void BM_GgxShadingPoint(benchmark::State& st) {
+    size_t i = 0;
+    for (auto _ : st) benchmark::DoNotOptimize(runGgxShadingPoint(i));
+}
+void BM_GlintShadingPointGgaa(benchmark::State& st) {
+    size_t i = 0;
+    for (auto _ : st) benchmark::DoNotOptimize(runGlintShadingPoint(true, i));
+}
 BENCHMARK(BM_Ggx);
 BENCHMARK(BM_GlintNoGgaa);
 BENCHMARK(BM_GlintGgaa);
+BENCHMARK(BM_GlintReferenceGgaa);
+BENCHMARK(BM_GgxShadingPoint);
+BENCHMARK(BM_GlintShadingPointGgaa);
 
 // Interleaved min-of-rounds timing (robust on a shared 2-core machine): ns per eval of each variant.
 void summary() {
@@ -98,17 +150,47 @@ void summary() {
         benchmark::DoNotOptimize(acc);
         return std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - t0).count() / n;
     };
-    double best[3] = {1e30, 1e30, 1e30};
+    constexpr int kVariants = 8;
+    double best[kVariants];
+    std::fill(best, best + kVariants, 1e30);
     for (int r = 0; r < 15; ++r) {
         best[0] = std::min(best[0], time([](size_t& i) { return runGgx(i); }));
         best[1] = std::min(best[1], time([](size_t& i) { return runGlint(false, i); }));
         best[2] = std::min(best[2], time([](size_t& i) { return runGlint(true, i); }));
+        best[3] = std::min(best[3], time([](size_t& i) { return runGlintReference(false, i); }));
+        best[4] = std::min(best[4], time([](size_t& i) { return runGlintReference(true, i); }));
+        best[5] = std::min(best[5], time([](size_t& i) { return runGgxShadingPoint(i); }));
+        best[6] = std::min(best[6], time([](size_t& i) { return runGlintShadingPoint(false, i); }));
+        best[7] = std::min(best[7], time([](size_t& i) { return runGlintShadingPoint(true, i); }));
     }
-    const Dictionary& d = Dictionary::instance();
     std::printf("glint summary (ns/eval, min of 15 interleaved rounds): GGX %.1f, glint no GGAA %.1f, glint GGAA %.1f\n",
                 best[0], best[1], best[2]);
     std::printf("GGAA overhead: %+.1f %% (target <= 5 %%); glint/GGX = %.1fx\n", 100.0 * (best[2] / best[1] - 1.0),
                 best[1] / best[0]);
+    std::printf("per-query pipeline (patchSdf, spec §3 as written): no GGAA %.1f, GGAA %.1f ns/eval "
+                "(cell set faster by %.2fx / %.2fx)\n",
+                best[3], best[4], best[3] / best[1], best[4] / best[2]);
+    std::printf("shading point, one light (evalPdf + sample + evalPdf), ns: GGX %.1f, glint no GGAA %.1f, glint GGAA %.1f "
+                "(GGAA overhead %+.1f %%; glint/GGX = %.1fx)\n",
+                best[5], best[6], best[7], 100.0 * (best[7] / best[6] - 1.0), best[7] / best[5]);
+    const Dictionary& d = Dictionary::instance();
+    {
+        double visited = 0, dictCells = 0, converged = 0;
+        for (const Case& k : cases()) {
+            const GlintParams p = params(true);
+            const Footprint fp = footprint(k.in.duvdx, k.in.duvdy, p.maxAniso);
+            const int i0 = int(std::floor(fp.lodP));
+            visited += forEachCell(i0, k.in.uv, fp.a1, fp.a2, [](int, int, float) {});
+            if (fp.lodP > float(i0)) visited += forEachCell(i0 + 1, k.in.uv, fp.a1, fp.a2, [](int, int, float) {});
+            GlintCellSet cells;
+            cells.build(d, p, k.in.uv, fp);
+            dictCells += cells.count;
+            converged += cells.convergedWeight;
+        }
+        const double n = double(cases().size());
+        std::printf("per shading point: %.1f cells visited (both LODs), %.1f non-empty dictionary cells, converged "
+                    "weight %.3f\n", visited / n, dictCells / n, converged / n);
+    }
     std::printf("dictionary: %s in %.2f s; CPU float32 with MIP chain %zu B; GPU RGB16F base %zu B (384 KiB), "
                 "RGB16F with chain %zu B, RGBA32F with chain (our GL upload) %zu B; cell-cap hits %llu\n",
                 d.fromCache() ? "loaded from cache" : "generated", d.generationSeconds(), d.bytesCpu(),
