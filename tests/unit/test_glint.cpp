@@ -926,4 +926,144 @@ TEST(GlintSampling, SampledSlopesFollowTheUnfilteredPatchSdf) {
     EXPECT_LT(z, 4.0);
 }
 
+// Variance under an environment (issue 11 item 3): the radiance a glint sphere reflects from the studio environment of
+// examples/glint/env/make_studio_env.py (the same function, evaluated analytically), estimated per pixel as the renderer
+// does for an environment: the small warm key (the part an environment's luminance sampling finds) by MIS between a
+// light sample of its box and the BSDF sample (power heuristic), everything else through the BSDF sample. Once with the
+// glint sampler, once with the Beckmann-only sampler (GlintParams::sampleGlints = false, the sampler before). A 64 x 48
+// orthographic view; uv (scale 2), the uv footprint and the GGAA frame rotation from neighbouring pixel centres.
+// Reference: 1024 samples per pixel with the glint sampler (both are unbiased).
+struct StudioKey {
+    double az = 20, el = 12, ha = 4, he = 4, lum = 0.2126 * 30 + 0.7152 * 26 + 0.0722 * 20;
+    // Support of the soft box (weight 0 beyond |d| >= half + 1 degree), sampled uniformly in (azimuth, elevation).
+    double pdf(const Vec3& d) const {
+        const double a = std::atan2(d.y, d.x) * 180 / kPiD, e = std::asin(std::clamp(double(d.z), -1.0, 1.0)) * 180 / kPiD;
+        const double da = std::fmod(a - az + 540.0, 360.0) - 180.0;
+        if (std::abs(da) >= ha + 1 || std::abs(e - el) >= he + 1) return 0;
+        const double area = (2 * (ha + 1) * kPiD / 180) * (2 * (he + 1) * kPiD / 180);
+        return 1 / (area * std::cos(e * kPiD / 180));  // dω = cos(el) d(az) d(el)
+    }
+    Vec3 sample(double u1, double u2) const {
+        const double a = (az + (2 * u1 - 1) * (ha + 1)) * kPiD / 180, e = (el + (2 * u2 - 1) * (he + 1)) * kPiD / 180;
+        return Vec3(float(std::cos(e) * std::cos(a)), float(std::cos(e) * std::sin(a)), float(std::sin(e)));
+    }
+};
+// Luminance of the studio environment along d, split into (everything but the key, the key).
+std::pair<double, double> studioLuminance(const Vec3& d) {
+    const double z = d.z;
+    double r, g, b;
+    if (z > 0) {
+        r = 0.10 + 0.10 * z, g = 0.12 + 0.12 * z, b = 0.16 + 0.20 * z;
+    } else {
+        r = g = b = 0.06;
+    }
+    auto box = [&](double caz, double cel, double ha, double he) {
+        const double az = std::atan2(d.y, d.x) * 180 / kPiD, el = std::asin(std::clamp(z, -1.0, 1.0)) * 180 / kPiD;
+        const double da = std::fmod(az - caz + 540.0, 360.0) - 180.0;
+        const double ea = std::clamp((ha - std::abs(da)) / 2 + 0.5, 0.0, 1.0);
+        const double ee = std::clamp((he - std::abs(el - cel)) / 2 + 0.5, 0.0, 1.0);
+        return ea * ee;
+    };
+    const struct { double az, el, ha, he, r, g, b; } boxes[] = {
+        {-60, 35, 25, 18, 5.0, 5.0, 4.8}, {70, 25, 20, 14, 3.0, 3.2, 3.6}, {175, 55, 30, 12, 2.0, 2.0, 2.0}};
+    for (const auto& k : boxes) {
+        const double w = box(k.az, k.el, k.ha, k.he);
+        r += w * k.r, g += w * k.g, b += w * k.b;
+    }
+    const StudioKey key;
+    return {0.2126 * r + 0.7152 * g + 0.0722 * b, box(key.az, key.el, key.ha, key.he) * key.lum};
+}
+
+struct SpherePixel {
+    Vec3 t, b, n;
+    GlintEvalInputs in;
+};
+std::vector<SpherePixel> glintSpherePixels(int W, int H) {
+    auto at = [](double x, double z, Vec3& n, Vec2& uv) {
+        const double r2 = x * x + z * z;
+        if (r2 >= 0.98) return false;
+        n = Vec3(float(x), float(-std::sqrt(1 - r2)), float(z));
+        uv = Vec2(float(2 * (std::atan2(double(n.y), double(n.x)) / (2 * kPiD) + 0.5)), float(2 * std::acos(z) / kPiD));
+        return true;
+    };
+    std::vector<SpherePixel> px;
+    const double step = 2.2 / W;
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            const double cx = -1.1 + (x + 0.5) * step, cz = 0.825 - (y + 0.5) * step;
+            Vec3 n, nx, nz;
+            Vec2 uv, uvx, uvz;
+            if (!at(cx, cz, n, uv) || !at(cx + step, cz, nx, uvx) || !at(cx, cz - step, nz, uvz)) continue;
+            SpherePixel p;
+            p.n = n;
+            p.t = glm::normalize(glm::cross(Vec3(0, 0, 1), n));
+            p.b = glm::cross(n, p.t);
+            p.in.uv = uv;
+            p.in.duvdx = uvx - uv;
+            p.in.duvdy = uvz - uv;
+            p.in.diff.dnx = Vec2(glm::dot(p.t, nx - n), glm::dot(p.b, nx - n));
+            p.in.diff.dny = Vec2(glm::dot(p.t, nz - n), glm::dot(p.b, nz - n));
+            px.push_back(p);
+        }
+    return px;
+}
+
+TEST(GlintSampling, EnvironmentRmseAtEqualSppIsLowerThanWithBeckmannSampling) {
+    const std::vector<SpherePixel> pixels = glintSpherePixels(64, 48);
+    ASSERT_GT(pixels.size(), 1500u);
+    GlintParams p;
+    p.sigmaX = p.sigmaY = 0.15f;
+    p.logDensity = 15.f;
+    const Vec3 woWorld(0, -1, 0);
+    auto estimate = [&](const SpherePixel& px, bool glints, int spp, uint32_t seed) {
+        GlintParams q = p;
+        q.sampleGlints = glints;
+        const GlintLobe lobe(dict(), q, px.in, Fresnel::one());
+        const Vec3 wo(glm::dot(woWorld, px.t), glm::dot(woWorld, px.b), glm::dot(woWorld, px.n));
+        std::mt19937 rng(seed);
+        std::uniform_real_distribution<float> u(0.f, 1.f);
+        const StudioKey key;
+        double sum = 0;
+        for (int s = 0; s < spp; ++s) {
+            const Vec3 wl = key.sample(u(rng), u(rng));  // light sample of the key
+            const Vec3 wlLocal(glm::dot(wl, px.t), glm::dot(wl, px.b), glm::dot(wl, px.n));
+            if (wlLocal.z > 0.f) {
+                const LobeValue v = lobe.evalPdf(LobeQuery{wo, wlLocal});
+                const double pl = key.pdf(wl);
+                sum += v.f.x * studioLuminance(wl).second * pl / (pl * pl + double(v.pdf) * v.pdf);
+            }
+            Vec3 wi;  // BSDF sample
+            const Vec2 uu(u(rng), u(rng));
+            if (!lobe.sample(wo, uu, wi)) continue;
+            const LobeValue v = lobe.evalPdf(LobeQuery{wo, wi});
+            if (!(v.pdf > 0.f)) continue;
+            const Vec3 w = wi.x * px.t + wi.y * px.b + wi.z * px.n;
+            const auto [rest, keyL] = studioLuminance(w);
+            const double pl = key.pdf(w), pb = v.pdf;
+            sum += v.f.x * (rest / pb + keyL * pb / (pb * pb + pl * pl));
+        }
+        return sum / spp;
+    };
+    double errGlint = 0, errBeckmann = 0, meanRef = 0, meanGlint = 0, meanBeckmann = 0, ssG = 0, ssB = 0;
+    for (size_t k = 0; k < pixels.size(); ++k) {
+        const double ref = estimate(pixels[k], true, 1024, 1000003u * uint32_t(k) + 7u);
+        const double g = estimate(pixels[k], true, 8, 7919u * uint32_t(k) + 1u);
+        const double b = estimate(pixels[k], false, 8, 7919u * uint32_t(k) + 1u);
+        errGlint += (g - ref) * (g - ref);
+        errBeckmann += (b - ref) * (b - ref);
+        meanRef += ref, meanGlint += g, meanBeckmann += b;
+        ssG += (g - ref) * (g - ref), ssB += (b - ref) * (b - ref);
+    }
+    const double n = double(pixels.size());
+    const double rmseGlint = std::sqrt(errGlint / n), rmseBeckmann = std::sqrt(errBeckmann / n);
+    std::printf("environment, 8 spp BSDF sampling over %zu pixels: RMSE glint sampler %.4f, Beckmann sampler %.4f "
+                "(ratio %.3f); means ref %.4f glint %.4f Beckmann %.4f\n",
+                pixels.size(), rmseGlint, rmseBeckmann, rmseGlint / rmseBeckmann, meanRef / n, meanGlint / n,
+                meanBeckmann / n);
+    EXPECT_LT(rmseGlint, 0.9 * rmseBeckmann);  // measured 0.734 with these seeds, 0.800 with another seed set
+    // Unbiased: the image means agree within 4 standard errors of the mean difference.
+    EXPECT_NEAR(meanGlint / n, meanRef / n, 4 * std::sqrt(ssG) / n);
+    EXPECT_NEAR(meanBeckmann / n, meanRef / n, 4 * std::sqrt(ssB) / n);
+}
+
 }  // namespace

@@ -25,6 +25,9 @@ struct GlintParams {
     bool ggaa = true;                      // C21 §4.2
     float kernelScale = 0.5f;              // s_K (C21 Eq. 19)
     DerivMode mode = DerivMode::ProjectedHalf;  // C21 Eq. 21 (default) or Eq. 20
+    // GlintLobe::sample: the glint distribution of the shading point mixed with the Beckmann lobe (true), or the
+    // limiting Beckmann lobe alone (false: the sampler before issue 11, kept for the variance comparisons).
+    bool sampleGlints = true;
 };
 
 constexpr int kCellCap = 100;  // the GLSL's cap on evaluated cells per LOD (spec §3 S3); hits are counted
@@ -826,8 +829,11 @@ public:
         }
         return cells_;
     }
-    // The mixture weight of the Beckmann lobe: kGlintBeckmannFraction, or 1 when every cell is empty.
-    float beckmannFraction() const { return cells().keptWeight > 0.f ? kGlintBeckmannFraction : 1.f; }
+    // The mixture weight of the Beckmann lobe: kGlintBeckmannFraction, or 1 when every cell is empty or glint
+    // sampling is off.
+    float beckmannFraction() const {
+        return p_.sampleGlints && cells().keptWeight > 0.f ? kGlintBeckmannFraction : 1.f;
+    }
 
 private:
     const Dictionary& dict_;
