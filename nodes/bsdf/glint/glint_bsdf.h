@@ -344,7 +344,19 @@ struct GlintCell {
     float weight;       // w_c
     float cosT, sinT;   // Rot(theta_c), theta_c = 2 pi u_theta
     uint16_t rowX, rowY;  // k_c * N + i_c and k_c * N + j_c: the dictionary rows of the two marginals
+    uint8_t loX, hiX, loY, hiY;  // the rows' nonzero MIP-0 texels (rowSupport)
 };
+
+// First and last nonzero MIP-0 texel of every dictionary row (2 bytes per row, rows of Dictionary::instance();
+// another dictionary gets the full range 0..R-1). A low-k marginal is a few narrow lobes: most of its texels are 0.
+const uint8_t* rowSupport(const Dictionary& dict);
+
+// Whether the MIP-0 linear lookup at u in [0, 1) (sampleLinear: texels max(i0, 0) and min(i0 + 1, R - 1)) reads only
+// zero texels of a row whose nonzero texels are [lo, hi]: then it returns exactly 0, without touching the row.
+inline bool lookupOutsideSupport(float u, int lo, int hi) {
+    const int i0 = int(std::floor(u * float(kRes) - 0.5f));
+    return std::min(i0 + 1, kRes - 1) < lo || std::max(i0, 0) > hi;
+}
 
 // The two SDFs one query needs: the GGAA-filtered one (what eval returns) and the unfiltered one (the density the
 // glint sampler draws from); equal when GGAA is off.
@@ -362,7 +374,6 @@ struct GlintCellSet {
 
     // S2 + S3 + S4.1-S4.9 without h~. Empty cells (u_A > A) cost one hash; converged cells two and an erfinv.
     void build(const Dictionary& dict, const GlintParams& p, Vec2 uv, const Footprint& fp) {
-        (void)dict;
         count = 0;
         convergedWeight = keptWeight = 0.f;
         footprintValid = fp.valid;
@@ -374,8 +385,9 @@ struct GlintCellSet {
         const int i0 = int(i0f);
         const float w = fp.lodP - i0f;
         CellMemo& memo = cellMemo();  // one thread-local access per shading point
-        addLevel(memo, p, i0, 1.f - w, uv, fp);
-        if (w > 0.f) addLevel(memo, p, std::min(i0 + 1, kLevels - 1), w, uv, fp);
+        const uint8_t* support = rowSupport(dict);
+        addLevel(memo, support, p, i0, 1.f - w, uv, fp);
+        if (w > 0.f) addLevel(memo, support, p, std::min(i0 + 1, kLevels - 1), w, uv, fp);
         keptWeight = convergedWeight;
         for (int c = 0; c < count; ++c) keptWeight += cells[c].weight;
     }
@@ -393,11 +405,13 @@ struct GlintCellSet {
         if (glm::dot(mh, mh) < 2.f * lim * lim) {
             const float* base = dict.data().data();
             const float invLim = 1.f / lim;
-            // Pass 1: rotation and the S4.8 test; the surviving cells' MIP-0 texels are prefetched, because the rows
-            // (1.5 MB in all) are read at random and the lookups are bound by memory latency, not arithmetic.
+            // Pass 1: rotation, the S4.8 test, and the support test (a lookup that reads only zero texels is 0; with
+            // GGAA only where the kernel is under one texel, rho <= 1, so MIP 0 is what is read). The surviving cells'
+            // texels are prefetched: the rows (1.5 MB in all) are read at random, so the lookups are bound by memory
+            // latency, not arithmetic.
             struct Lookup {
                 int cell;
-                float ux, uy;
+                float ux, uy, rhoX, rhoY;
             };
             Lookup live[kMaxCells];
             int nLive = 0;
@@ -406,32 +420,41 @@ struct GlintCellSet {
                 const float mx = c.cosT * mh.x + c.sinT * mh.y, my = -c.sinT * mh.x + c.cosT * mh.y;
                 if (std::abs(mx) >= lim || std::abs(my) >= lim) continue;  // S4.8
                 const float ux = std::abs(mx) * invLim, uy = std::abs(my) * invLim;
-                live[nLive++] = {n, ux, uy};
+                const bool outX = lookupOutsideSupport(ux, c.loX, c.hiX), outY = lookupOutsideSupport(uy, c.loY, c.hiY);
+                float rhoX = 0.f, rhoY = 0.f;
+                if (ggaa) {
+                    // GGAA (S5.3-S5.4): kernel s_K Rot(-theta) M^-1 d / (4 sigma_o), x components to the x marginal.
+                    const float gxx = c.cosT * gx.x + c.sinT * gx.y, gxy = -c.sinT * gx.x + c.cosT * gx.y;
+                    const float gyx = c.cosT * gy.x + c.sinT * gy.y, gyy = -c.sinT * gy.x + c.cosT * gy.y;
+                    rhoX = float(kRes) * std::max(std::abs(gxx), std::abs(gyx));
+                    rhoY = float(kRes) * std::max(std::abs(gxy), std::abs(gyy));
+                }
+                // Filtered and unfiltered products are both 0 when one axis reads only zeros at MIP 0 with rho <= 1.
+                if ((outX && !(rhoX > 1.f)) || (outY && !(rhoY > 1.f))) continue;
+                live[nLive++] = {n, outX ? -1.f - ux : ux, outY ? -1.f - uy : uy, rhoX, rhoY};
                 __builtin_prefetch(base + size_t(c.rowX) * kRowFloats + int(ux * float(kRes)));
                 __builtin_prefetch(base + size_t(c.rowY) * kRowFloats + int(uy * float(kRes)));
             }
             float sumF = 0.f, sumU = 0.f;
             for (int n = 0; n < nLive; ++n) {
-                const GlintCell& c = cells[live[n].cell];
-                const float ux = live[n].ux, uy = live[n].uy;
+                const Lookup& lk = live[n];
+                const GlintCell& c = cells[lk.cell];
+                // A negative coordinate marks an axis outside the MIP-0 support: its unfiltered lookup is 0.
+                const bool outX = lk.ux < 0.f, outY = lk.uy < 0.f;
+                const float ux = outX ? -1.f - lk.ux : lk.ux, uy = outY ? -1.f - lk.uy : lk.uy;
                 const float* rx = base + size_t(c.rowX) * kRowFloats;
                 const float* ry = base + size_t(c.rowY) * kRowFloats;
-                const float px = sampleLinear(rx, kRes, ux);
+                const float px = outX ? 0.f : sampleLinear(rx, kRes, ux);
                 if (!ggaa) {
-                    if (px == 0.f) continue;  // most texels of a low-k marginal are 0: skip the second lookup
+                    if (px == 0.f) continue;
                     sumF += c.weight * px * sampleLinear(ry, kRes, uy);
                     continue;
                 }
-                // GGAA (S5.3-S5.4): kernel s_K Rot(-theta) M^-1 d / (4 sigma_o), x components to the x marginal. A
-                // kernel under one texel (rho <= 1) reads MIP 0 as the unfiltered lookup does: reuse that value.
-                const float gxx = c.cosT * gx.x + c.sinT * gx.y, gxy = -c.sinT * gx.x + c.cosT * gx.y;
-                const float gyx = c.cosT * gy.x + c.sinT * gy.y, gyy = -c.sinT * gy.x + c.cosT * gy.y;
-                const float rhoX = float(kRes) * std::max(std::abs(gxx), std::abs(gyx));
-                const float rhoY = float(kRes) * std::max(std::abs(gxy), std::abs(gyy));
-                const float pxF = rhoX > 1.f ? textureGradFiltered(rx, ux, rhoX) : px;
+                // A kernel under one texel (rho <= 1) reads MIP 0 as the unfiltered lookup does: reuse that value.
+                const float pxF = lk.rhoX > 1.f ? textureGradFiltered(rx, ux, lk.rhoX) : px;
                 if (pxF == 0.f && px == 0.f) continue;
-                const float py = sampleLinear(ry, kRes, uy);
-                const float pyF = rhoY > 1.f ? textureGradFiltered(ry, uy, rhoY) : py;
+                const float py = outY ? 0.f : sampleLinear(ry, kRes, uy);
+                const float pyF = lk.rhoY > 1.f ? textureGradFiltered(ry, uy, lk.rhoY) : py;
                 sumF += c.weight * pxF * pyF;
                 if constexpr (kUnfiltered) sumU += c.weight * px * py;
             }
@@ -451,7 +474,8 @@ struct GlintCellSet {
     bool sampleSlope(const Dictionary& dict, const GlintShape& shape, Vec2 u, Vec2& slope) const;
 
 private:
-    void addLevel(CellMemo& memo, const GlintParams& p, int l, float blend, Vec2 uv, const Footprint& fp) {
+    void addLevel(CellMemo& memo, const uint8_t* support, const GlintParams& p, int l, float blend, Vec2 uv,
+                  const Footprint& fp) {
         const int first = count;
         const float lc = p.logDensity / 1.38629436f - float(kLevels - 1) + float(l);  // S4.4
         float sumW = 0.f, convW = 0.f;
@@ -473,6 +497,8 @@ private:
             c.sinT = r.sinT;
             c.rowX = uint16_t(k * kMarginals + r.i);
             c.rowY = uint16_t(k * kMarginals + r.j);
+            c.loX = support[2 * c.rowX], c.hiX = support[2 * c.rowX + 1];
+            c.loY = support[2 * c.rowY], c.hiY = support[2 * c.rowY + 1];
         });
         if (!(sumW > 0.f)) {
             count = first;
