@@ -244,7 +244,7 @@ void summary() {
             converged += cells.convergedWeight;
         }
         const double n = double(cases().size());
-        std::printf("per shading point: %.1f cells visited (both LODs), %.1f non-empty dictionary cells, converged "
+        std::printf("per shading point: %.1f cells visited (both LODs), %.1f non-empty cells, converged "
                     "weight %.3f\n", visited / n, dictCells / n, converged / n);
     }
     std::printf("dictionary: %s in %.2f s; CPU float32 with MIP chain %zu B; GPU RGB16F base %zu B (384 KiB), "

@@ -149,24 +149,6 @@ inline float textureGrad1D(const float* row, float u, float g1, float g2) {
     return textureGradFiltered(row, u, rho);
 }
 
-// sin and cos of theta in [0, 2 pi] without libm: Cody-Waite reduction by pi/2 with the three-part constant of Cephes
-// sinf/cosf (q <= 4, so q C1 and q C2 are exact) and their minimax polynomials on [-pi/4, pi/4]; within ~1 ulp of
-// std::sin/std::cos (sincosf costs ~18 ns, this ~4 ns). Used where a cell's rotation is computed once per lobe.
-inline void sinCosSmall(float theta, float& s, float& c) {
-    const float q = std::floor(theta * 0.636619772f + 0.5f);
-    const float a = ((theta - q * 1.5703125f) - q * 4.837512969970703125e-4f) - q * 7.54978995489188216e-8f;
-    const float z = a * a;
-    const float sa = a + a * z * (-1.6666654611e-1f + z * (8.3321608736e-3f + z * -1.9515295891e-4f));
-    const float ca = 1.f - 0.5f * z + z * z * (4.166664568298827e-2f + z * (-1.388731625493765e-3f + z * 2.443315711809948e-5f));
-    // Quadrant q: (s, c) = (sa, ca), (ca, -sa), (-sa, -ca), (-ca, sa), selected without branches (q is random per
-    // cell, a switch mispredicts).
-    const int qi = int(q);
-    const bool swap = (qi & 1) != 0;
-    const float s0 = swap ? ca : sa, c0 = swap ? sa : ca;
-    s = (qi & 2) ? -s0 : s0;
-    c = ((qi + 1) & 2) ? -c0 : c0;
-}
-
 // ---- per-thread memo of the cells' random numbers ---------------------------------------------------------------
 // Every random number of a cell is a function of its seed S alone (S4.2), whatever the material, and consecutive
 // shading points revisit the same cells (the samples of one pixel, neighbouring pixels, the coarser of the two
@@ -187,7 +169,9 @@ struct CellMemo {
         e.seed = S;
         e.uA = hashUniform(13u * S);
         e.erfZ = erfinvF(2.f * hashUniform(2171u * S) - 1.f);
-        sinCosSmall(2.f * kPi * hashUniform(S), e.sinT, e.cosT);
+        const float theta = 2.f * kPi * hashUniform(S);  // as cellSdf: the same floats
+        e.cosT = std::cos(theta);
+        e.sinT = std::sin(theta);
         e.i = uint8_t(std::min(int(float(kMarginals) * hashUniform(16807u * S)), kMarginals - 1));
         e.j = uint8_t(std::min(int(float(kMarginals) * hashUniform(48271u * S)), kMarginals - 1));
         e.filled = 1;
@@ -334,17 +318,19 @@ inline float patchSdf(const SdfQuery& q, Vec2 uv, const Footprint& fp) {
 }
 
 // ---- The cells of one shading point (wi-independent work, done once per lobe) -----------------------------------
-// Which cells the footprint covers, their EWA weights, the LOD blend, and each cell's random numbers (u_A, k, theta,
+// Which cells the footprint covers, their EWA weights W, the LOD blend, and each cell's random numbers (u_A, k, theta,
 // i, j) depend on uv and the footprint only, not on wi. A shading point asks several queries (one per light, the BSDF
-// sample, its MIS evaluation), so the lobe computes them once: the patch SDF of C20 Eq. 3 / C21 Eq. 10 becomes
-// P(h~) = w_B P_B(h~) + det(M^-1) sum_c w_c p_{i_c,k_c}(|m_c.x|) p_{j_c,k_c}(|m_c.y|),   m_c = Rot(-theta_c) M^-1 h~,
-// with w_c = (LOD blend weight) W_c / sum_level W the normalised EWA weight of each non-empty dictionary cell and w_B the
-// total weight of the non-empty converged cells (k = L, spec S4.6). Same terms as patchSdf, summed in another order.
+// sample, its MIS evaluation), so the lobe computes them once and each query is one pass over the stored cells:
+// per level, sum_c W_c P_c(h~) / sum_c W_c over the visited cells (S3.6), then the LOD blend (S2). The sums run over
+// the same terms in the same order as levelSdf/patchSdf (empty cells and cells zeroed by S4.8 add an exact 0), so
+// the result is bit-identical to the per-query pipeline. Sampling uses the normalised weights
+// w_c = (blend weight) W_c / sum_level W of the non-empty cells.
 struct GlintCell {
-    float weight;       // w_c
-    float cosT, sinT;   // Rot(theta_c), theta_c = 2 pi u_theta
-    uint16_t rowX, rowY;  // k_c * N + i_c and k_c * N + j_c: the dictionary rows of the two marginals
+    float weight;         // W_c (EWA weight, unnormalised)
+    float cosT, sinT;     // Rot(theta_c), theta_c = 2 pi u_theta
+    uint16_t rowX, rowY;  // k_c * N + i_c and k_c * N + j_c: the dictionary rows; rowX = kConverged: k = L (P_B)
     uint8_t loX, hiX, loY, hiY;  // the rows' nonzero MIP-0 texels (rowSupport)
+    static constexpr uint16_t kConverged = 0xffff;
 };
 
 // First and last nonzero MIP-0 texel of every dictionary row (2 bytes per row, rows of Dictionary::instance();
@@ -367,14 +353,25 @@ struct GlintSdfPair {
 struct GlintCellSet {
     static constexpr int kMaxCells = 2 * kCellCap;  // two LODs, each capped by forEachCell
     bool footprintValid = false;  // false: |a2| = 0, P = P_B (spec S1 recommendation)
-    int count = 0;                // dictionary cells in cells[0, count)
-    float convergedWeight = 0.f;  // w_B
-    float keptWeight = 0.f;       // w_B + sum_c w_c = the integral of the unfiltered P over the slope plane (spec §4.6)
+    int count = 0;                // non-empty cells (dictionary and converged) in cells[0, count)
+    int levels = 0;               // 1 or 2 LODs
+    int levelEnd[2] = {0, 0};     // cells of level n: [levelEnd[n-1], levelEnd[n])
+    float sumW[2] = {0.f, 0.f};   // sum of W over every visited cell of the level (empty ones included)
+    float blend = 0.f;            // w: P = (1 - w) P_lev(i0) + w P_lev(i0 + 1)
+    float convergedWeight = 0.f;  // sum of the normalised weights of the converged cells
+    float keptWeight = 0.f;       // sum of all normalised weights = the integral of the unfiltered P (spec §4.6)
     GlintCell cells[kMaxCells];   // left uninitialised until build()
 
-    // S2 + S3 + S4.1-S4.9 without h~. Empty cells (u_A > A) cost one hash; converged cells two and an erfinv.
+    // The sampling weight of cell n: (blend weight of its level) W / sum W.
+    float normalisedWeight(int n) const {
+        const int lev = n < levelEnd[0] ? 0 : 1;
+        return (lev == 0 ? (levels == 2 ? 1.f - blend : 1.f) : blend) * cells[n].weight / sumW[lev];
+    }
+
+    // S2 + S3 + S4.1-S4.9 without h~. Empty cells (u_A > A) are not stored (they only normalise).
     void build(const Dictionary& dict, const GlintParams& p, Vec2 uv, const Footprint& fp) {
         count = 0;
+        levels = 0;
         convergedWeight = keptWeight = 0.f;
         footprintValid = fp.valid;
         if (!fp.valid) {
@@ -383,43 +380,59 @@ struct GlintCellSet {
         }
         const float i0f = std::floor(fp.lodP);
         const int i0 = int(i0f);
-        const float w = fp.lodP - i0f;
+        blend = fp.lodP - i0f;
         CellMemo& memo = cellMemo();  // one thread-local access per shading point
         const uint8_t* support = rowSupport(dict);
-        addLevel(memo, support, p, i0, 1.f - w, uv, fp);
-        if (w > 0.f) addLevel(memo, support, p, std::min(i0 + 1, kLevels - 1), w, uv, fp);
-        keptWeight = convergedWeight;
-        for (int c = 0; c < count; ++c) keptWeight += cells[c].weight;
+        addLevel(memo, support, p, i0, uv, fp);
+        if (blend > 0.f) addLevel(memo, support, p, std::min(i0 + 1, kLevels - 1), uv, fp);
+        for (int n = 0; n < count; ++n) {
+            if (!(sumW[n < levelEnd[0] ? 0 : 1] > 0.f)) continue;
+            const float w = normalisedWeight(n);
+            keptWeight += w;
+            if (cells[n].rowX == GlintCell::kConverged) convergedWeight += w;
+        }
     }
 
-    // P(h~) from mh = M^-1 h~ and the GGAA kernel gradients before the cell rotation (SdfQuery::gx, gy). kUnfiltered:
-    // also the unfiltered sum (for the sampling pdf). Returns the sums over the dictionary cells times det(M^-1) plus
-    // w_B P_B.
+    // P(h~) from mh = M^-1 h~ and the GGAA kernel gradients before the cell rotation (SdfQuery::gx, gy), pB = P_B(h~).
+    // kUnfiltered: also the unfiltered P (for the sampling pdf).
     template <bool kUnfiltered>
     GlintSdfPair evaluate(const Dictionary& dict, const GlintShape& shape, Vec2 mh, float pB, bool ggaa, Vec2 gx,
                           Vec2 gy) const {
         GlintSdfPair r;
+        if (!footprintValid) {
+            r.filtered = r.unfiltered = pB;
+            return r;
+        }
         const float lim = float(4.0 * kSigmaO);
         // Whole-query early-out: max(|m.x|, |m.y|) >= |m| / sqrt(2) = |mh| / sqrt(2) in every rotation, so when
         // |mh|^2 >= 2 lim^2 every dictionary cell is zeroed by S4.8 and only the converged cells remain.
-        if (glm::dot(mh, mh) < 2.f * lim * lim) {
-            const float* base = dict.data().data();
-            const float invLim = 1.f / lim;
+        // The 1e-5 margin covers the rounding of the rotation, so skipping is exact.
+        const bool dictionaryZero = !(glm::dot(mh, mh) < 2.00002f * lim * lim);
+        const float* base = dict.data().data();
+        float levelF[2] = {0.f, 0.f}, levelU[2] = {0.f, 0.f};
+        for (int lev = 0; lev < levels; ++lev) {
+            const int begin = lev == 0 ? 0 : levelEnd[0], end = levelEnd[lev];
             // Pass 1: rotation, the S4.8 test, and the support test (a lookup that reads only zero texels is 0; with
-            // GGAA only where the kernel is under one texel, rho <= 1, so MIP 0 is what is read). The surviving cells'
-            // texels are prefetched: the rows (1.5 MB in all) are read at random, so the lookups are bound by memory
-            // latency, not arithmetic.
+            // GGAA only where the kernel is under one texel, rho <= 1, so MIP 0 is what is read). The surviving
+            // cells' texels are prefetched: the rows (1.5 MB in all) are read at random, so the lookups are bound by
+            // memory latency, not arithmetic. Order is kept: the sums below add the same terms as levelSdf.
             struct Lookup {
                 int cell;
                 float ux, uy, rhoX, rhoY;
+                bool outX, outY;  // the axis's MIP-0 lookup reads only zeros
             };
-            Lookup live[kMaxCells];
+            Lookup live[kCellCap];
             int nLive = 0;
-            for (int n = 0; n < count; ++n) {
+            for (int n = begin; n < end; ++n) {
                 const GlintCell& c = cells[n];
+                if (c.rowX == GlintCell::kConverged) {
+                    live[nLive++] = {n, 0.f, 0.f, 0.f, 0.f, false, false};
+                    continue;
+                }
+                if (dictionaryZero) continue;
                 const float mx = c.cosT * mh.x + c.sinT * mh.y, my = -c.sinT * mh.x + c.cosT * mh.y;
                 if (std::abs(mx) >= lim || std::abs(my) >= lim) continue;  // S4.8
-                const float ux = std::abs(mx) * invLim, uy = std::abs(my) * invLim;
+                const float ux = std::abs(mx) / lim, uy = std::abs(my) / lim;
                 const bool outX = lookupOutsideSupport(ux, c.loX, c.hiX), outY = lookupOutsideSupport(uy, c.loY, c.hiY);
                 float rhoX = 0.f, rhoY = 0.f;
                 if (ggaa) {
@@ -431,7 +444,7 @@ struct GlintCellSet {
                 }
                 // Filtered and unfiltered products are both 0 when one axis reads only zeros at MIP 0 with rho <= 1.
                 if ((outX && !(rhoX > 1.f)) || (outY && !(rhoY > 1.f))) continue;
-                live[nLive++] = {n, outX ? -1.f - ux : ux, outY ? -1.f - uy : uy, rhoX, rhoY};
+                live[nLive++] = {n, ux, uy, rhoX, rhoY, outX, outY};
                 __builtin_prefetch(base + size_t(c.rowX) * kRowFloats + int(ux * float(kRes)));
                 __builtin_prefetch(base + size_t(c.rowY) * kRowFloats + int(uy * float(kRes)));
             }
@@ -439,15 +452,21 @@ struct GlintCellSet {
             for (int n = 0; n < nLive; ++n) {
                 const Lookup& lk = live[n];
                 const GlintCell& c = cells[lk.cell];
-                // A negative coordinate marks an axis outside the MIP-0 support: its unfiltered lookup is 0.
-                const bool outX = lk.ux < 0.f, outY = lk.uy < 0.f;
-                const float ux = outX ? -1.f - lk.ux : lk.ux, uy = outY ? -1.f - lk.uy : lk.uy;
+                if (c.rowX == GlintCell::kConverged) {  // S4.6
+                    sumF += c.weight * pB;
+                    if constexpr (kUnfiltered) sumU += c.weight * pB;
+                    continue;
+                }
+                const bool outX = lk.outX, outY = lk.outY;
+                const float ux = lk.ux, uy = lk.uy;
                 const float* rx = base + size_t(c.rowX) * kRowFloats;
                 const float* ry = base + size_t(c.rowY) * kRowFloats;
                 const float px = outX ? 0.f : sampleLinear(rx, kRes, ux);
                 if (!ggaa) {
                     if (px == 0.f) continue;
-                    sumF += c.weight * px * sampleLinear(ry, kRes, uy);
+                    const float v = shape.detMinv * px * sampleLinear(ry, kRes, uy);  // C21 Eq. 4
+                    sumF += c.weight * v;
+                    if constexpr (kUnfiltered) sumU += c.weight * v;
                     continue;
                 }
                 // A kernel under one texel (rho <= 1) reads MIP 0 as the unfiltered lookup does: reuse that value.
@@ -455,14 +474,20 @@ struct GlintCellSet {
                 if (pxF == 0.f && px == 0.f) continue;
                 const float py = outY ? 0.f : sampleLinear(ry, kRes, uy);
                 const float pyF = lk.rhoY > 1.f ? textureGradFiltered(ry, uy, lk.rhoY) : py;
-                sumF += c.weight * pxF * pyF;
-                if constexpr (kUnfiltered) sumU += c.weight * px * py;
+                sumF += c.weight * (shape.detMinv * pxF * pyF);  // C21 Eq. 15
+                if constexpr (kUnfiltered) sumU += c.weight * (shape.detMinv * px * py);
             }
-            r.filtered = shape.detMinv * sumF;
-            r.unfiltered = ggaa ? shape.detMinv * sumU : r.filtered;
+            levelF[lev] = sumW[lev] > 0.f ? sumF / sumW[lev] : 0.f;
+            levelU[lev] = sumW[lev] > 0.f ? sumU / sumW[lev] : 0.f;
         }
-        r.filtered += convergedWeight * pB;
-        r.unfiltered += convergedWeight * pB;
+        if (levels == 2) {  // S2 LOD blend, as patchSdf
+            r.filtered = (1.f - blend) * levelF[0] + blend * levelF[1];
+            r.unfiltered = (1.f - blend) * levelU[0] + blend * levelU[1];
+        } else {
+            r.filtered = levelF[0];
+            r.unfiltered = levelU[0];
+        }
+        if (!kUnfiltered) r.unfiltered = 0.f;
         return r;
     }
 
@@ -474,25 +499,23 @@ struct GlintCellSet {
     bool sampleSlope(const Dictionary& dict, const GlintShape& shape, Vec2 u, Vec2& slope) const;
 
 private:
-    void addLevel(CellMemo& memo, const uint8_t* support, const GlintParams& p, int l, float blend, Vec2 uv,
-                  const Footprint& fp) {
-        const int first = count;
+    void addLevel(CellMemo& memo, const uint8_t* support, const GlintParams& p, int l, Vec2 uv, const Footprint& fp) {
         const float lc = p.logDensity / 1.38629436f - float(kLevels - 1) + float(l);  // S4.4
-        float sumW = 0.f, convW = 0.f;
+        float sw = 0.f;
         const float jitterScale = p.jitter * 1.41421356f;
         forEachCell(l, uv, fp.a1, fp.a2, [&](int s, int t, float W) {
-            sumW += W;
+            sw += W;
             const CellMemoEntry& r = memo.get(cellSeed(l, s, t));
             if (r.uA > p.relArea) return;  // empty cell: it only normalises
             // k as cellDictionaryLod computes it (same operations, so the same float result)
             const float ld = p.jitter != 0.f ? lc + jitterScale * r.erfZ : lc;
             const int k = int(std::clamp(std::floor(ld + 0.5f), 0.f, float(kLevels)));
-            if (k == kLevels) {
-                convW += W;
-                return;
-            }
             GlintCell& c = cells[count++];
             c.weight = W;
+            if (k == kLevels) {
+                c.rowX = c.rowY = GlintCell::kConverged;
+                return;
+            }
             c.cosT = r.cosT;
             c.sinT = r.sinT;
             c.rowX = uint16_t(k * kMarginals + r.i);
@@ -500,13 +523,8 @@ private:
             c.loX = support[2 * c.rowX], c.hiX = support[2 * c.rowX + 1];
             c.loY = support[2 * c.rowY], c.hiY = support[2 * c.rowY + 1];
         });
-        if (!(sumW > 0.f)) {
-            count = first;
-            return;
-        }
-        const float scale = blend / sumW;
-        for (int c = first; c < count; ++c) cells[c].weight *= scale;
-        convergedWeight += convW * scale;
+        sumW[levels] = sw;
+        levelEnd[levels++] = count;
     }
 };
 
@@ -532,17 +550,28 @@ inline float splitSign(float& u) {
 
 inline bool GlintCellSet::sampleSlope(const Dictionary& dict, const GlintShape& shape, Vec2 u, Vec2& slope) const {
     if (!(keptWeight > 0.f)) return false;
-    float r = u.x * keptWeight;
-    if (r < convergedWeight || count == 0) {
-        u.x = std::min(r / convergedWeight, 0.99999994f);
+    if (!footprintValid) {
         slope = sampleBeckmannSlope(shape, u);
         return true;
     }
-    r -= convergedWeight;
-    int n = 0;
-    while (n < count - 1 && r >= cells[n].weight) r -= cells[n++].weight;  // rounding: the last cell takes the rest
+    float r = u.x * keptWeight;
+    int n = 0, last = -1;
+    float w = 0.f;
+    for (; n < count; ++n) {  // rounding: the last cell with weight takes the rest
+        if (!(sumW[n < levelEnd[0] ? 0 : 1] > 0.f)) continue;
+        w = normalisedWeight(n);
+        last = n;
+        if (r < w) break;
+        r -= w;
+    }
+    if (last < 0) return false;
+    if (n == count) n = last;
     const GlintCell& c = cells[n];
-    u.x = std::clamp(r / c.weight, 0.f, 0.99999994f);
+    u.x = std::clamp(r / w, 0.f, 0.99999994f);
+    if (c.rowX == GlintCell::kConverged) {
+        slope = sampleBeckmannSlope(shape, u);
+        return true;
+    }
     const float sx = splitSign(u.x), sy = splitSign(u.y);
     const int kx = c.rowX / kMarginals, ky = c.rowY / kMarginals;
     const float mx = sx * dict.sampleMarginal(kx, c.rowX - kx * kMarginals, u.x);
