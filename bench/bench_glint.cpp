@@ -1,7 +1,8 @@
 // Glint BRDF CPU cost (nodes/bsdf/glint): eval with GGAA off and on against GGX on identical inputs in one run, the
 // GGAA overhead (C21 Table 1 reports 0.6-4.2 % on a GPU; spec §4.11 budget ~10 %), and dictionary/pyramid memory.
-// Two granularities: one evaluation of a fresh shading point (glintFCosScalar: the footprint's cells built, then one
-// query; the per-query pipeline glintFCosReference beside it), and one renderer shading point with one light
+// Two granularities: one evaluation of a fresh shading point (glintFCosCells: the footprint's cells built, then one
+// query, as a lobe's first query; the per-query pipeline glintFCosReference beside it), and one renderer shading point
+// with one light
 // (GlintLobe: light evalPdf + sample + evalPdf of the sample, the cells shared by the three; GGX lobe the same).
 #include "core/render/lobes/ggx.h"
 #include "nodes/bsdf/glint/glint_bsdf.h"
@@ -87,7 +88,7 @@ float runGlint(bool ggaa, size_t& i) {
     const GlintParams p = params(ggaa);
     const GlintShape shape = GlintShape::make(p.sigmaX, p.sigmaY, p.rho);
     const Case& k = cases()[i++ & 4095];
-    return glintFCosScalar(d, p, shape, k.in, k.wo, k.wi);
+    return glintFCosCells(d, p, shape, k.in, k.wo, k.wi);
 }
 
 float runGlintReference(bool ggaa, size_t& i) {

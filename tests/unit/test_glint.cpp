@@ -682,8 +682,9 @@ TEST(GlintLobe, SamplingMatchesItsPdfAndEstimatesTheAlbedo) {
 }
 
 // ---- the per-shading-point cell set (issue 11 item 4) -------------------------------------------------------------
-// glintFCosScalar (GlintCellSet: cells, random numbers and weights computed once, then one pass per query) against the
-// per-query pipeline of spec §3 (patchSdf over cellSdf), over random materials, footprints, GGAA on/off and A < 1.
+// The lobe's path (GlintCellSet: cells, random numbers and weights computed once, then one pass per query) against the
+// per-query pipeline of spec §3 (patchSdf over cellSdf), over random materials, footprints, GGAA on/off, A < 1 and
+// point-light distances.
 TEST(GlintCells, CellSetEqualsThePerQueryPipeline) {
     std::mt19937 rng(23);
     std::uniform_real_distribution<float> u(0.f, 1.f);
@@ -708,8 +709,8 @@ TEST(GlintCells, CellSetEqualsThePerQueryPipeline) {
         in.duvdy = Vec2(0.3f * s * (u(rng) - 0.5f), s * (0.3f + u(rng)));
         in.diff.dnx = Vec2(0.05f * u(rng), 0.02f * (u(rng) - 0.5f));
         in.diff.dny = Vec2(0.02f * (u(rng) - 0.5f), 0.05f * u(rng));
-        const float a = glintFCosScalar(dict(), p, shape, in, wo, wi);
-        const float b = glintFCosReference(dict(), p, shape, in, wo, wi);
+        const float a = glintFCosCells(dict(), p, shape, in, wo, wi, n % 5 == 0 ? 2.f : std::numeric_limits<float>::infinity());
+        const float b = glintFCosReference(dict(), p, shape, in, wo, wi, n % 5 == 0 ? 2.f : std::numeric_limits<float>::infinity());
         if (b > 1e-6f) ++nonzero;
         worst = std::max(worst, double(std::abs(a - b)) / std::max(double(b), 1e-6));
     }

@@ -717,23 +717,17 @@ inline GlintQueryValue glintQuery(const Dictionary& dict, const GlintParams& p, 
     return v;
 }
 
-// One evaluation without a lobe (tests, bench, tools): builds the cells and answers one query.
+// One evaluation without a lobe (tests, bench, tools): the per-query pipeline, which for a single query is cheaper
+// than building a GlintCellSet (the lobe's path, bit-identical: GlintCells tests).
 inline float glintFCosScalar(const Dictionary& dict, const GlintParams& p, const GlintShape& shape,
                              const GlintEvalInputs& in, const Vec3& wo, const Vec3& wi, Vec3* hOut = nullptr,
-                             float lightDistance = std::numeric_limits<float>::infinity()) {
-    if (wo.z <= 0.f || wi.z <= 0.f) return 0.f;
-    GlintCellSet cells;
-    cells.build(dict, p, in.uv, footprint(in.duvdx, in.duvdy, p.maxAniso));
-    const GlintQueryValue v = glintQuery<false>(dict, p, shape, in, cells, wo, wi, lightDistance);
-    if (hOut && v.valid) *hOut = v.h;
-    return v.fcos;
-}
+                             float lightDistance = std::numeric_limits<float>::infinity());
 
 // The per-query pipeline of spec §3 as written (patchSdf over cellSdf for every query): the reference the cell set is
 // tested against, and the bench's "per query" baseline.
 inline float glintFCosReference(const Dictionary& dict, const GlintParams& p, const GlintShape& shape,
                                 const GlintEvalInputs& in, const Vec3& wo, const Vec3& wi,
-                                float lightDistance = std::numeric_limits<float>::infinity()) {
+                                float lightDistance = std::numeric_limits<float>::infinity(), Vec3* hOut = nullptr) {
     if (wo.z <= 0.f || wi.z <= 0.f) return 0.f;
     const Vec3 hs = wo + wi;
     const float len = std::sqrt(glm::dot(hs, hs));
@@ -741,6 +735,7 @@ inline float glintFCosReference(const Dictionary& dict, const GlintParams& p, co
     const Vec3 h = hs / len;
     const float woh = glm::dot(wo, h), wih = glm::dot(wi, h);
     if (h.z <= 0.f || woh <= 0.f || wih <= 0.f) return 0.f;
+    if (hOut) *hOut = h;
     Vec2 dx(0.f), dy(0.f);
     if (p.ggaa) {
         dx = ggaaDerivative(in.diff, 0, p.mode, wo, wi, h, len, lightDistance);
@@ -752,6 +747,22 @@ inline float glintFCosReference(const Dictionary& dict, const GlintParams& p, co
     const float D = P / (hz2 * hz2);
     const float G = std::min(1.f, 2.f * h.z * wo.z / woh) * std::min(1.f, 2.f * h.z * wi.z / wih);
     return G * D / (4.f * wo.z);
+}
+
+// The lobe's path for one query: builds the cells and answers one query (tests compare it with the reference).
+inline float glintFCosCells(const Dictionary& dict, const GlintParams& p, const GlintShape& shape,
+                            const GlintEvalInputs& in, const Vec3& wo, const Vec3& wi,
+                            float lightDistance = std::numeric_limits<float>::infinity()) {
+    if (wo.z <= 0.f || wi.z <= 0.f) return 0.f;
+    GlintCellSet cells;
+    cells.build(dict, p, in.uv, footprint(in.duvdx, in.duvdy, p.maxAniso));
+    return glintQuery<false>(dict, p, shape, in, cells, wo, wi, lightDistance).fcos;
+}
+
+inline float glintFCosScalar(const Dictionary& dict, const GlintParams& p, const GlintShape& shape,
+                             const GlintEvalInputs& in, const Vec3& wo, const Vec3& wi, Vec3* hOut,
+                             float lightDistance) {
+    return glintFCosReference(dict, p, shape, in, wo, wi, lightDistance, hOut);
 }
 
 // Reference limit (spec S7, "Limit as density -> infinity"): Cook-Torrance with P_B and the same V-cavity G.
