@@ -1,10 +1,15 @@
 // Glint BRDF CPU cost (nodes/bsdf/glint): eval with GGAA off and on against GGX on identical inputs in one run, the
 // GGAA overhead (C21 Table 1 reports 0.6-4.2 % on a GPU; spec §4.11 budget ~10 %), and dictionary/pyramid memory.
+// Two granularities: one evaluation of a fresh shading point (glintFCosCells: the footprint's cells built, then one
+// query, as a lobe's first query; the per-query pipeline glintFCosReference beside it), and one renderer shading point
+// with one light
+// (GlintLobe: light evalPdf + sample + evalPdf of the sample, the cells shared by the three; GGX lobe the same).
 #include "core/render/lobes/ggx.h"
 #include "nodes/bsdf/glint/glint_bsdf.h"
 
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <random>
@@ -46,6 +51,28 @@ const std::vector<Case>& cases() {
     return c;
 }
 
+// A renderer's access pattern: a 64 x 64-pixel window of a plane in raster order (footprint 1e-3 UV per pixel), 4
+// jittered samples per pixel one after the other, directions as above. Consecutive shading points share cells.
+const std::vector<Case>& rasterCases() {
+    static std::vector<Case> c = [] {
+        std::vector<Case> v;
+        std::mt19937 rng(29);
+        std::uniform_real_distribution<float> u(0.f, 1.f);
+        const float s = 1e-3f;
+        for (int y = 0; y < 64; ++y)
+            for (int x = 0; x < 64; ++x)
+                for (int k = 0; k < 4; ++k) {
+                    Case q = cases()[(y * 64 + x) & 4095];
+                    q.in.uv = Vec2(0.3f + (float(x) + u(rng)) * s, 0.4f + (float(y) + u(rng)) * s);
+                    q.in.duvdx = Vec2(s, 0.f);
+                    q.in.duvdy = Vec2(0.f, s);
+                    v.push_back(q);
+                }
+        return v;
+    }();
+    return c;
+}
+
 GlintParams params(bool ggaa) {
     GlintParams p;
     p.logDensity = 15.f;   // C21 demo
@@ -61,7 +88,68 @@ float runGlint(bool ggaa, size_t& i) {
     const GlintParams p = params(ggaa);
     const GlintShape shape = GlintShape::make(p.sigmaX, p.sigmaY, p.rho);
     const Case& k = cases()[i++ & 4095];
-    return glintFCosScalar(d, p, shape, k.in, k.wo, k.wi);
+    return glintFCosCells(d, p, shape, k.in, k.wo, k.wi);
+}
+
+float runGlintReference(bool ggaa, size_t& i) {
+    static const Dictionary& d = Dictionary::instance();
+    const GlintParams p = params(ggaa);
+    const GlintShape shape = GlintShape::make(p.sigmaX, p.sigmaY, p.rho);
+    const Case& k = cases()[i++ & 4095];
+    return glintFCosReference(d, p, shape, k.in, k.wo, k.wi);
+}
+
+// One shading point of the renderer with one light: NEE evalPdf, the BSDF sample, the evalPdf of the sample (MIS).
+template <class Lobe>
+float shadingPoint(const Lobe& lobe, const Case& k, size_t i) {
+    const LobeValue a = lobe.evalPdf(LobeQuery{k.wo, k.wi});
+    Vec3 wi;
+    const float u1 = float((i * 0x9E3779B1u) >> 8 & 0xffffff) * 0x1p-24f, u2 = float((i * 0x85EBCA77u) >> 8 & 0xffffff) * 0x1p-24f;
+    float r = a.f.x + a.pdf;
+    if (lobe.sample(LobeQuery{k.wo, k.wo}, Vec2(u1, u2), wi)) {
+        const LobeValue b = lobe.evalPdf(LobeQuery{k.wo, wi});
+        r += b.f.x + b.pdf;
+    }
+    return r;
+}
+float runGlintShadingPoint(bool ggaa, size_t& i) {
+    static const Dictionary& d = Dictionary::instance();
+    const Case& k = cases()[i & 4095];
+    const GlintLobe lobe(d, params(ggaa), k.in, Fresnel::one());
+    return shadingPoint(lobe, k, i++);
+}
+// The same shading point as the lobe before issue 11 answered it: every query through the per-query pipeline, the
+// pdf and the sample from the Beckmann lobe.
+float referenceShadingPoint(const Case& k, bool ggaa, size_t i) {
+    static const Dictionary& d = Dictionary::instance();
+    const GlintParams p = params(ggaa);
+    const GlintShape shape = GlintShape::make(p.sigmaX, p.sigmaY, p.rho);
+    float r = glintFCosReference(d, p, shape, k.in, k.wo, k.wi) + beckmannHalfPdf(shape, k.wo, k.wi);
+    const float u1 = float((i * 0x9E3779B1u) >> 8 & 0xffffff) * 0x1p-24f, u2 = float((i * 0x85EBCA77u) >> 8 & 0xffffff) * 0x1p-24f;
+    const Vec3 h = sampleBeckmannHalf(shape, Vec2(u1, u2));
+    const float woh = glm::dot(k.wo, h);
+    const Vec3 wi = 2.f * woh * h - k.wo;
+    if (woh > 0.f && wi.z > 0.f) r += glintFCosReference(d, p, shape, k.in, k.wo, wi) + beckmannHalfPdf(shape, k.wo, wi);
+    return r;
+}
+float runReferenceShadingPoint(bool ggaa, size_t& i) {
+    const Case& k = cases()[i & 4095];
+    return referenceShadingPoint(k, ggaa, i++);
+}
+float runRasterShadingPoint(bool ggaa, size_t& i) {
+    static const Dictionary& d = Dictionary::instance();
+    const Case& k = rasterCases()[i % rasterCases().size()];
+    const GlintLobe lobe(d, params(ggaa), k.in, Fresnel::one());
+    return shadingPoint(lobe, k, i++);
+}
+float runRasterReferenceShadingPoint(bool ggaa, size_t& i) {
+    const Case& k = rasterCases()[i % rasterCases().size()];
+    return referenceShadingPoint(k, ggaa, i++);
+}
+float runGgxShadingPoint(size_t& i) {
+    static const GgxLobe lobe(0.2263f, 0.2263f, Fresnel::one());
+    const Case& k = cases()[i & 4095];
+    return shadingPoint(lobe, k, i++);
 }
 
 float runGgx(size_t& i) {
@@ -82,9 +170,24 @@ void BM_GlintGgaa(benchmark::State& st) {
     size_t i = 0;
     for (auto _ : st) benchmark::DoNotOptimize(runGlint(true, i));
 }
+void BM_GlintReferenceGgaa(benchmark::State& st) {
+    size_t i = 0;
+    for (auto _ : st) benchmark::DoNotOptimize(runGlintReference(true, i));
+}
+void BM_GgxShadingPoint(benchmark::State& st) {
+    size_t i = 0;
+    for (auto _ : st) benchmark::DoNotOptimize(runGgxShadingPoint(i));
+}
+void BM_GlintShadingPointGgaa(benchmark::State& st) {
+    size_t i = 0;
+    for (auto _ : st) benchmark::DoNotOptimize(runGlintShadingPoint(true, i));
+}
 BENCHMARK(BM_Ggx);
 BENCHMARK(BM_GlintNoGgaa);
 BENCHMARK(BM_GlintGgaa);
+BENCHMARK(BM_GlintReferenceGgaa);
+BENCHMARK(BM_GgxShadingPoint);
+BENCHMARK(BM_GlintShadingPointGgaa);
 
 // Interleaved min-of-rounds timing (robust on a shared 2-core machine): ns per eval of each variant.
 void summary() {
@@ -98,17 +201,53 @@ void summary() {
         benchmark::DoNotOptimize(acc);
         return std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - t0).count() / n;
     };
-    double best[3] = {1e30, 1e30, 1e30};
+    constexpr int kVariants = 11;
+    double best[kVariants];
+    std::fill(best, best + kVariants, 1e30);
     for (int r = 0; r < 15; ++r) {
         best[0] = std::min(best[0], time([](size_t& i) { return runGgx(i); }));
         best[1] = std::min(best[1], time([](size_t& i) { return runGlint(false, i); }));
         best[2] = std::min(best[2], time([](size_t& i) { return runGlint(true, i); }));
+        best[3] = std::min(best[3], time([](size_t& i) { return runGlintReference(false, i); }));
+        best[4] = std::min(best[4], time([](size_t& i) { return runGlintReference(true, i); }));
+        best[5] = std::min(best[5], time([](size_t& i) { return runGgxShadingPoint(i); }));
+        best[6] = std::min(best[6], time([](size_t& i) { return runGlintShadingPoint(false, i); }));
+        best[7] = std::min(best[7], time([](size_t& i) { return runGlintShadingPoint(true, i); }));
+        best[8] = std::min(best[8], time([](size_t& i) { return runReferenceShadingPoint(true, i); }));
+        best[9] = std::min(best[9], time([](size_t& i) { return runRasterShadingPoint(true, i); }));
+        best[10] = std::min(best[10], time([](size_t& i) { return runRasterReferenceShadingPoint(true, i); }));
     }
-    const Dictionary& d = Dictionary::instance();
     std::printf("glint summary (ns/eval, min of 15 interleaved rounds): GGX %.1f, glint no GGAA %.1f, glint GGAA %.1f\n",
                 best[0], best[1], best[2]);
     std::printf("GGAA overhead: %+.1f %% (target <= 5 %%); glint/GGX = %.1fx\n", 100.0 * (best[2] / best[1] - 1.0),
                 best[1] / best[0]);
+    std::printf("per-query pipeline (patchSdf, spec §3 as written): no GGAA %.1f, GGAA %.1f ns/eval "
+                "(cell set faster by %.2fx / %.2fx)\n",
+                best[3], best[4], best[3] / best[1], best[4] / best[2]);
+    std::printf("shading point, one light (evalPdf + sample + evalPdf), ns: GGX %.1f, glint no GGAA %.1f, glint GGAA %.1f "
+                "(GGAA overhead %+.1f %%; glint/GGX = %.1fx)\n",
+                best[5], best[6], best[7], 100.0 * (best[7] / best[6] - 1.0), best[7] / best[5]);
+    std::printf("shading point, GGAA, as before issue 11 (per-query pipeline, Beckmann sampling): random %.1f ns "
+                "(lobe faster by %.2fx); raster order %.1f ns vs lobe %.1f ns (faster by %.2fx)\n",
+                best[8], best[8] / best[7], best[10], best[9], best[10] / best[9]);
+    const Dictionary& d = Dictionary::instance();
+    {
+        double visited = 0, dictCells = 0, converged = 0;
+        for (const Case& k : cases()) {
+            const GlintParams p = params(true);
+            const Footprint fp = footprint(k.in.duvdx, k.in.duvdy, p.maxAniso);
+            const int i0 = int(std::floor(fp.lodP));
+            visited += forEachCell(i0, k.in.uv, fp.a1, fp.a2, [](int, int, float) {});
+            if (fp.lodP > float(i0)) visited += forEachCell(i0 + 1, k.in.uv, fp.a1, fp.a2, [](int, int, float) {});
+            GlintCellSet cells;
+            cells.build(d, p, k.in.uv, fp);
+            dictCells += cells.count;
+            converged += cells.convergedWeight;
+        }
+        const double n = double(cases().size());
+        std::printf("per shading point: %.1f cells visited (both LODs), %.1f non-empty cells, converged "
+                    "weight %.3f\n", visited / n, dictCells / n, converged / n);
+    }
     std::printf("dictionary: %s in %.2f s; CPU float32 with MIP chain %zu B; GPU RGB16F base %zu B (384 KiB), "
                 "RGB16F with chain %zu B, RGBA32F with chain (our GL upload) %zu B; cell-cap hits %llu\n",
                 d.fromCache() ? "loaded from cache" : "generated", d.generationSeconds(), d.bytesCpu(),

@@ -681,4 +681,374 @@ TEST(GlintLobe, SamplingMatchesItsPdfAndEstimatesTheAlbedo) {
     EXPECT_LE(ifcos, 1.02);
 }
 
+// ---- the per-shading-point cell set (issue 11 item 4) -------------------------------------------------------------
+// The lobe's path (GlintCellSet: cells, random numbers and weights computed once, then one pass per query) against the
+// per-query pipeline of spec §3 (patchSdf over cellSdf), over random materials, footprints, GGAA on/off, A < 1 and
+// point-light distances.
+TEST(GlintCells, CellSetEqualsThePerQueryPipeline) {
+    std::mt19937 rng(23);
+    std::uniform_real_distribution<float> u(0.f, 1.f);
+    double worst = 0;
+    int nonzero = 0;
+    for (int n = 0; n < 6000; ++n) {
+        GlintParams p;
+        p.logDensity = 8.f + 40.f * u(rng);
+        p.relArea = n % 3 == 0 ? 0.05f + 0.9f * u(rng) : 1.f;
+        p.sigmaX = 0.03f + 0.5f * u(rng);
+        p.sigmaY = 0.03f + 0.5f * u(rng);
+        p.rho = 1.8f * (u(rng) - 0.5f);
+        p.ggaa = n % 2 == 0;
+        p.kernelScale = n % 4 == 0 ? 1.f : 0.5f;
+        GlintShape shape = GlintShape::make(p.sigmaX, p.sigmaY, p.rho);
+        Vec3 wo = glm::normalize(Vec3(u(rng) - 0.5f, u(rng) - 0.5f, 1.f));
+        Vec3 wi = glm::normalize(Vec3(-wo.x + 0.6f * (u(rng) - 0.5f), -wo.y + 0.6f * (u(rng) - 0.5f), wo.z));
+        GlintEvalInputs in;
+        in.uv = Vec2(u(rng), u(rng));
+        float s = std::exp2(-4.f - 10.f * u(rng));
+        in.duvdx = Vec2(s, 0.3f * s * (u(rng) - 0.5f));
+        in.duvdy = Vec2(0.3f * s * (u(rng) - 0.5f), s * (0.3f + u(rng)));
+        in.diff.dnx = Vec2(0.05f * u(rng), 0.02f * (u(rng) - 0.5f));
+        in.diff.dny = Vec2(0.02f * (u(rng) - 0.5f), 0.05f * u(rng));
+        const float a = glintFCosCells(dict(), p, shape, in, wo, wi, n % 5 == 0 ? 2.f : std::numeric_limits<float>::infinity());
+        const float b = glintFCosReference(dict(), p, shape, in, wo, wi, n % 5 == 0 ? 2.f : std::numeric_limits<float>::infinity());
+        if (b > 1e-6f) ++nonzero;
+        worst = std::max(worst, double(std::abs(a - b)) / std::max(double(b), 1e-6));
+    }
+    std::printf("cell set vs per-query pipeline: worst relative difference %.3g (%d nonzero)\n", worst, nonzero);
+    EXPECT_GT(nonzero, 1500);
+    // Bit-identical: the same terms summed in the same order (the skipped cells add exact zeros).
+    EXPECT_EQ(worst, 0.0);
+}
+
+// The lobe answers every query of its shading point from one cell set: many queries on one lobe equal fresh
+// single-query evaluations, in any order.
+TEST(GlintCells, LobeCacheGivesTheSameAnswerForEveryQueryOrder) {
+    GlintParams p;
+    p.logDensity = 16.f;
+    p.sigmaX = 0.2f, p.sigmaY = 0.12f, p.rho = 0.3f;
+    GlintEvalInputs in;
+    in.uv = Vec2(0.61f, 0.27f);
+    in.duvdx = Vec2(1.5e-3f, 2e-4f);
+    in.duvdy = Vec2(-3e-4f, 1.1e-3f);
+    in.diff.dnx = Vec2(0.03f, 0.01f);
+    in.diff.dny = Vec2(-0.01f, 0.02f);
+    const Fresnel F = Fresnel::schlick(Color3(0.9f, 0.6f, 0.5f));
+    GlintShape shape = GlintShape::make(p.sigmaX, p.sigmaY, p.rho);
+    GlintLobe cached(dict(), p, in, F);
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> u(0.f, 1.f);
+    Vec3 wo = glm::normalize(Vec3(0.2f, -0.3f, 1.f));
+    int nonzero = 0;
+    for (int n = 0; n < 500; ++n) {
+        Vec3 wi = glm::normalize(Vec3(-wo.x + 0.8f * (u(rng) - 0.5f), -wo.y + 0.8f * (u(rng) - 0.5f), 1.f));
+        const float lightDistance = n % 2 ? 3.f : std::numeric_limits<float>::infinity();
+        LobeValue a = cached.evalPdf(LobeQuery{wo, wi, lightDistance});
+        GlintLobe fresh(dict(), p, in, F);
+        LobeValue b = fresh.evalPdf(LobeQuery{wo, wi, lightDistance});
+        EXPECT_EQ(a.f.x, b.f.x);
+        EXPECT_EQ(a.f.z, b.f.z);
+        EXPECT_EQ(a.pdf, b.pdf);
+        Vec3 h;
+        const float ref = glintFCosReference(dict(), p, shape, in, wo, wi, lightDistance);
+        glintFCosScalar(dict(), p, shape, in, wo, wi, &h, lightDistance);
+        EXPECT_NEAR(a.f.x, F.eval(glm::dot(wo, h)).x * ref, 1e-5f * std::max(ref, 1e-3f));
+        nonzero += ref > 0.f;
+    }
+    EXPECT_GT(nonzero, 100);
+}
+
+// ---- glint-aware importance sampling (issue 11 item 3) ------------------------------------------------------------
+// A sparkly footprint: level ~6, dictionary LODs 0-8, a few narrow lobes, GGAA on.
+GlintLobe sparklyLobe(float relArea = 1.f) {
+    GlintParams p;
+    p.logDensity = 15.f;
+    p.sigmaX = 0.18f, p.sigmaY = 0.12f, p.rho = -0.35f;
+    p.relArea = relArea;
+    GlintEvalInputs in;
+    in.uv = Vec2(0.37f, 0.81f);
+    in.duvdx = Vec2(2e-3f, 3e-4f);
+    in.duvdy = Vec2(-2e-4f, 1.6e-3f);
+    in.diff.dnx = Vec2(0.02f, 0.005f);
+    in.diff.dny = Vec2(0.f, 0.02f);
+    return GlintLobe(dict(), p, in, Fresnel::one());
+}
+
+// χ² of sample() against the quadrature of evalPdf().pdf over (θ, φ) bins of the hemisphere. The pdf is a sum of
+// narrow lobes (σ_l σ / σ_o ≈ 0.007 in slope), so each bin is integrated on a 24 × 24 sub-grid (0.003 rad).
+TEST(GlintSampling, SampledDirectionsFollowThePdfChiSquare) {
+    const GlintLobe lobe = sparklyLobe();
+    ASSERT_GT(lobe.cells().count, 3);
+    const Vec3 wo = glm::normalize(Vec3(0.25f, 0.1f, 1.f));
+    const int nt = 24, np = 48, sub = 24, N = 1000000;
+    std::vector<double> expected(nt * np, 0.0), observed(nt * np, 0.0);
+    double total = 0;
+    for (int a = 0; a < nt; ++a)
+        for (int b = 0; b < np; ++b) {
+            double s = 0;
+            for (int i = 0; i < sub; ++i)
+                for (int j = 0; j < sub; ++j) {
+                    double th = (a + (i + 0.5) / sub) / nt * kPiD / 2, ph = (b + (j + 0.5) / sub) / np * 2 * kPiD;
+                    Vec3 wi(float(std::sin(th) * std::cos(ph)), float(std::sin(th) * std::sin(ph)), float(std::cos(th)));
+                    s += lobe.pdf(wo, wi) * std::sin(th);
+                }
+            expected[a * np + b] = s * (kPiD / 2 / nt / sub) * (2 * kPiD / np / sub);
+            total += expected[a * np + b];
+        }
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<float> u(0.f, 1.f);
+    int ok = 0;
+    for (int n = 0; n < N; ++n) {
+        Vec3 wi;
+        if (!lobe.sample(wo, Vec2(u(rng), u(rng)), wi)) continue;
+        ++ok;
+        double th = std::acos(std::clamp(double(wi.z), 0.0, 1.0)), ph = std::atan2(double(wi.y), double(wi.x));
+        if (ph < 0) ph += 2 * kPiD;
+        int a = std::min(int(th / (kPiD / 2) * nt), nt - 1), b = std::min(int(ph / (2 * kPiD) * np), np - 1);
+        observed[a * np + b] += 1;
+    }
+    // Bins expecting < 5 samples are pooled (standard χ² practice).
+    double chi2 = 0, pooledE = 0, pooledO = 0;
+    int dof = 0;
+    for (size_t k = 0; k < expected.size(); ++k) {
+        double e = expected[k] * N;
+        if (e < 5) {
+            pooledE += e, pooledO += observed[k];
+            continue;
+        }
+        chi2 += (observed[k] - e) * (observed[k] - e) / e;
+        ++dof;
+    }
+    if (pooledE >= 5) chi2 += (pooledO - pooledE) * (pooledO - pooledE) / pooledE, ++dof;
+    // Normal approximation of the χ² quantile: mean dof, std sqrt(2 dof); 4 sigma is p ≈ 3e-5.
+    const double z = (chi2 - dof) / std::sqrt(2.0 * dof);
+    std::printf("glint sampling χ²: %.1f for %d bins (z = %.2f); ∫pdf (quadrature) %.4f, accepted %.4f\n", chi2, dof, z,
+                total, double(ok) / N);
+    EXPECT_GT(dof, 200);
+    EXPECT_LT(z, 4.0);
+    EXPECT_NEAR(total, double(ok) / N, 0.005);
+}
+
+// The pdf of the glint part alone is a probability density: ∫ pdf = 1 over the sphere of wi (MC with uniform
+// directions on the sphere, where wi.z <= 0 counts the samples sample() rejects) and E[f/pdf] = ∫ f cos (quadrature).
+TEST(GlintSampling, PdfIntegratesToOneAndEstimatesTheAlbedo) {
+    for (float relArea : {1.f, 0.3f}) {
+        const GlintLobe lobe = sparklyLobe(relArea);
+        const Vec3 wo = glm::normalize(Vec3(-0.3f, 0.2f, 1.f));
+        std::mt19937 rng(9);
+        std::uniform_real_distribution<float> u(0.f, 1.f);
+        // pdf over the upper hemisphere (quadrature, fine grid) + the rejected fraction (sampled) = 1.
+        const int nt = 600, np = 1200;
+        double ipdf = 0, ifcos = 0;
+        for (int a = 0; a < nt; ++a)
+            for (int b = 0; b < np; ++b) {
+                double th = (a + 0.5) / nt * kPiD / 2, ph = (b + 0.5) / np * 2 * kPiD;
+                Vec3 wi(float(std::sin(th) * std::cos(ph)), float(std::sin(th) * std::sin(ph)), float(std::cos(th)));
+                double dw = std::sin(th) * (kPiD / 2 / nt) * (2 * kPiD / np);
+                LobeValue v = lobe.evalPdf(LobeQuery{wo, wi});
+                ipdf += v.pdf * dw;
+                ifcos += v.f.x * dw;
+            }
+        const int N = 400000;
+        int ok = 0;
+        double est = 0, est2 = 0;
+        for (int n = 0; n < N; ++n) {
+            Vec3 wi;
+            if (!lobe.sample(wo, Vec2(u(rng), u(rng)), wi)) continue;
+            ++ok;
+            LobeValue v = lobe.evalPdf(LobeQuery{wo, wi});
+            ASSERT_GT(v.pdf, 0.f);
+            const double w = v.f.x / v.pdf;
+            est += w, est2 += w * w;
+        }
+        est /= N;
+        const double se = std::sqrt((est2 / N - est * est) / N);
+        std::printf("A = %.1f: ∫pdf %.4f vs accepted %.4f; ∫f cos quadrature %.4f, E[f/pdf] %.4f ± %.4f\n", relArea,
+                    ipdf, double(ok) / N, ifcos, est, se);
+        EXPECT_NEAR(ipdf, double(ok) / N, 0.005);
+        EXPECT_NEAR(est, ifcos, std::max(4 * se, 0.01 * ifcos));
+    }
+}
+
+// The Jacobians of the sampler, checked on their own: half slopes drawn by GlintCellSet::sampleSlope have the density
+// P_unfiltered(h~) / keptWeight in the slope plane (2D histogram against the patch SDF integrated per bin).
+TEST(GlintSampling, SampledSlopesFollowTheUnfilteredPatchSdf) {
+    const GlintLobe lobe = sparklyLobe();
+    const GlintCellSet& cells = lobe.cells();
+    const GlintShape shape = GlintShape::make(lobe.params().sigmaX, lobe.params().sigmaY, lobe.params().rho);
+    const float range = 0.8f;
+    const int nb = 40, sub = 16, N = 1000000;
+    std::vector<double> expected(nb * nb), observed(nb * nb, 0.0);
+    for (int a = 0; a < nb; ++a)
+        for (int b = 0; b < nb; ++b) {
+            double s = 0;
+            for (int i = 0; i < sub; ++i)
+                for (int j = 0; j < sub; ++j) {
+                    Vec2 hs(-range + 2 * range * (a + (i + 0.5f) / sub) / nb, -range + 2 * range * (b + (j + 0.5f) / sub) / nb);
+                    s += cells.evaluate<true>(dict(), shape, shape.applyInv(hs), beckmannSdf(hs, shape), false, Vec2(0.f),
+                                              Vec2(0.f)).unfiltered;
+                }
+            expected[a * nb + b] = s * std::pow(2 * range / nb / sub, 2) / cells.keptWeight;
+        }
+    std::mt19937 rng(4);
+    std::uniform_real_distribution<float> u(0.f, 1.f);
+    for (int n = 0; n < N; ++n) {
+        Vec2 hs;
+        ASSERT_TRUE(cells.sampleSlope(dict(), shape, Vec2(u(rng), u(rng)), hs));
+        int a = int(std::floor((hs.x + range) / (2 * range) * nb)), b = int(std::floor((hs.y + range) / (2 * range) * nb));
+        if (a >= 0 && a < nb && b >= 0 && b < nb) observed[a * nb + b] += 1;
+    }
+    double chi2 = 0;
+    int dof = 0;
+    for (size_t k = 0; k < expected.size(); ++k) {
+        double e = expected[k] * N;
+        if (e < 5) continue;
+        chi2 += (observed[k] - e) * (observed[k] - e) / e;
+        ++dof;
+    }
+    const double z = (chi2 - dof) / std::sqrt(2.0 * dof);
+    std::printf("slope sampling χ²: %.1f for %d bins (z = %.2f)\n", chi2, dof, z);
+    EXPECT_GT(dof, 100);
+    EXPECT_LT(z, 4.0);
+}
+
+// Variance under an environment (issue 11 item 3): the radiance a glint sphere reflects from the studio environment of
+// examples/glint/env/make_studio_env.py (the same function, evaluated analytically), estimated per pixel as the renderer
+// does for an environment: the small warm key (the part an environment's luminance sampling finds) by MIS between a
+// light sample of its box and the BSDF sample (power heuristic), everything else through the BSDF sample. Once with the
+// glint sampler, once with the Beckmann-only sampler (GlintParams::sampleGlints = false, the sampler before). A 64 x 48
+// orthographic view; uv (scale 2), the uv footprint and the GGAA frame rotation from neighbouring pixel centres.
+// Reference: 1024 samples per pixel with the glint sampler (both are unbiased).
+struct StudioKey {
+    double az = 20, el = 12, ha = 4, he = 4, lum = 0.2126 * 30 + 0.7152 * 26 + 0.0722 * 20;
+    // Support of the soft box (weight 0 beyond |d| >= half + 1 degree), sampled uniformly in (azimuth, elevation).
+    double pdf(const Vec3& d) const {
+        const double a = std::atan2(d.y, d.x) * 180 / kPiD, e = std::asin(std::clamp(double(d.z), -1.0, 1.0)) * 180 / kPiD;
+        const double da = std::fmod(a - az + 540.0, 360.0) - 180.0;
+        if (std::abs(da) >= ha + 1 || std::abs(e - el) >= he + 1) return 0;
+        const double area = (2 * (ha + 1) * kPiD / 180) * (2 * (he + 1) * kPiD / 180);
+        return 1 / (area * std::cos(e * kPiD / 180));  // dω = cos(el) d(az) d(el)
+    }
+    Vec3 sample(double u1, double u2) const {
+        const double a = (az + (2 * u1 - 1) * (ha + 1)) * kPiD / 180, e = (el + (2 * u2 - 1) * (he + 1)) * kPiD / 180;
+        return Vec3(float(std::cos(e) * std::cos(a)), float(std::cos(e) * std::sin(a)), float(std::sin(e)));
+    }
+};
+// Luminance of the studio environment along d, split into (everything but the key, the key).
+std::pair<double, double> studioLuminance(const Vec3& d) {
+    const double z = d.z;
+    double r, g, b;
+    if (z > 0) {
+        r = 0.10 + 0.10 * z, g = 0.12 + 0.12 * z, b = 0.16 + 0.20 * z;
+    } else {
+        r = g = b = 0.06;
+    }
+    auto box = [&](double caz, double cel, double ha, double he) {
+        const double az = std::atan2(d.y, d.x) * 180 / kPiD, el = std::asin(std::clamp(z, -1.0, 1.0)) * 180 / kPiD;
+        const double da = std::fmod(az - caz + 540.0, 360.0) - 180.0;
+        const double ea = std::clamp((ha - std::abs(da)) / 2 + 0.5, 0.0, 1.0);
+        const double ee = std::clamp((he - std::abs(el - cel)) / 2 + 0.5, 0.0, 1.0);
+        return ea * ee;
+    };
+    const struct { double az, el, ha, he, r, g, b; } boxes[] = {
+        {-60, 35, 25, 18, 5.0, 5.0, 4.8}, {70, 25, 20, 14, 3.0, 3.2, 3.6}, {175, 55, 30, 12, 2.0, 2.0, 2.0}};
+    for (const auto& k : boxes) {
+        const double w = box(k.az, k.el, k.ha, k.he);
+        r += w * k.r, g += w * k.g, b += w * k.b;
+    }
+    const StudioKey key;
+    return {0.2126 * r + 0.7152 * g + 0.0722 * b, box(key.az, key.el, key.ha, key.he) * key.lum};
+}
+
+struct SpherePixel {
+    Vec3 t, b, n;
+    GlintEvalInputs in;
+};
+std::vector<SpherePixel> glintSpherePixels(int W, int H) {
+    auto at = [](double x, double z, Vec3& n, Vec2& uv) {
+        const double r2 = x * x + z * z;
+        if (r2 >= 0.98) return false;
+        n = Vec3(float(x), float(-std::sqrt(1 - r2)), float(z));
+        uv = Vec2(float(2 * (std::atan2(double(n.y), double(n.x)) / (2 * kPiD) + 0.5)), float(2 * std::acos(z) / kPiD));
+        return true;
+    };
+    std::vector<SpherePixel> px;
+    const double step = 2.2 / W;
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            const double cx = -1.1 + (x + 0.5) * step, cz = 0.825 - (y + 0.5) * step;
+            Vec3 n, nx, nz;
+            Vec2 uv, uvx, uvz;
+            if (!at(cx, cz, n, uv) || !at(cx + step, cz, nx, uvx) || !at(cx, cz - step, nz, uvz)) continue;
+            SpherePixel p;
+            p.n = n;
+            p.t = glm::normalize(glm::cross(Vec3(0, 0, 1), n));
+            p.b = glm::cross(n, p.t);
+            p.in.uv = uv;
+            p.in.duvdx = uvx - uv;
+            p.in.duvdy = uvz - uv;
+            p.in.diff.dnx = Vec2(glm::dot(p.t, nx - n), glm::dot(p.b, nx - n));
+            p.in.diff.dny = Vec2(glm::dot(p.t, nz - n), glm::dot(p.b, nz - n));
+            px.push_back(p);
+        }
+    return px;
+}
+
+TEST(GlintSampling, EnvironmentRmseAtEqualSppIsLowerThanWithBeckmannSampling) {
+    const std::vector<SpherePixel> pixels = glintSpherePixels(64, 48);
+    ASSERT_GT(pixels.size(), 1500u);
+    GlintParams p;
+    p.sigmaX = p.sigmaY = 0.15f;
+    p.logDensity = 15.f;
+    const Vec3 woWorld(0, -1, 0);
+    auto estimate = [&](const SpherePixel& px, bool glints, int spp, uint32_t seed) {
+        GlintParams q = p;
+        q.sampleGlints = glints;
+        const GlintLobe lobe(dict(), q, px.in, Fresnel::one());
+        const Vec3 wo(glm::dot(woWorld, px.t), glm::dot(woWorld, px.b), glm::dot(woWorld, px.n));
+        std::mt19937 rng(seed);
+        std::uniform_real_distribution<float> u(0.f, 1.f);
+        const StudioKey key;
+        double sum = 0;
+        for (int s = 0; s < spp; ++s) {
+            const Vec3 wl = key.sample(u(rng), u(rng));  // light sample of the key
+            const Vec3 wlLocal(glm::dot(wl, px.t), glm::dot(wl, px.b), glm::dot(wl, px.n));
+            if (wlLocal.z > 0.f) {
+                const LobeValue v = lobe.evalPdf(LobeQuery{wo, wlLocal});
+                const double pl = key.pdf(wl);
+                sum += v.f.x * studioLuminance(wl).second * pl / (pl * pl + double(v.pdf) * v.pdf);
+            }
+            Vec3 wi;  // BSDF sample
+            const Vec2 uu(u(rng), u(rng));
+            if (!lobe.sample(wo, uu, wi)) continue;
+            const LobeValue v = lobe.evalPdf(LobeQuery{wo, wi});
+            if (!(v.pdf > 0.f)) continue;
+            const Vec3 w = wi.x * px.t + wi.y * px.b + wi.z * px.n;
+            const auto [rest, keyL] = studioLuminance(w);
+            const double pl = key.pdf(w), pb = v.pdf;
+            sum += v.f.x * (rest / pb + keyL * pb / (pb * pb + pl * pl));
+        }
+        return sum / spp;
+    };
+    double errGlint = 0, errBeckmann = 0, meanRef = 0, meanGlint = 0, meanBeckmann = 0, ssG = 0, ssB = 0;
+    for (size_t k = 0; k < pixels.size(); ++k) {
+        const double ref = estimate(pixels[k], true, 1024, 1000003u * uint32_t(k) + 7u);
+        const double g = estimate(pixels[k], true, 8, 7919u * uint32_t(k) + 1u);
+        const double b = estimate(pixels[k], false, 8, 7919u * uint32_t(k) + 1u);
+        errGlint += (g - ref) * (g - ref);
+        errBeckmann += (b - ref) * (b - ref);
+        meanRef += ref, meanGlint += g, meanBeckmann += b;
+        ssG += (g - ref) * (g - ref), ssB += (b - ref) * (b - ref);
+    }
+    const double n = double(pixels.size());
+    const double rmseGlint = std::sqrt(errGlint / n), rmseBeckmann = std::sqrt(errBeckmann / n);
+    std::printf("environment, 8 spp BSDF sampling over %zu pixels: RMSE glint sampler %.4f, Beckmann sampler %.4f "
+                "(ratio %.3f); means ref %.4f glint %.4f Beckmann %.4f\n",
+                pixels.size(), rmseGlint, rmseBeckmann, rmseGlint / rmseBeckmann, meanRef / n, meanGlint / n,
+                meanBeckmann / n);
+    EXPECT_LT(rmseGlint, 0.9 * rmseBeckmann);  // measured 0.734 with these seeds, 0.800 with another seed set
+    // Unbiased: the image means agree within 4 standard errors of the mean difference.
+    EXPECT_NEAR(meanGlint / n, meanRef / n, 4 * std::sqrt(ssG) / n);
+    EXPECT_NEAR(meanBeckmann / n, meanRef / n, 4 * std::sqrt(ssB) / n);
+}
+
 }  // namespace

@@ -25,6 +25,9 @@ struct GlintParams {
     bool ggaa = true;                      // C21 §4.2
     float kernelScale = 0.5f;              // s_K (C21 Eq. 19)
     DerivMode mode = DerivMode::ProjectedHalf;  // C21 Eq. 21 (default) or Eq. 20
+    // GlintLobe::sample: the glint distribution of the shading point mixed with the Beckmann lobe (true), or the
+    // limiting Beckmann lobe alone (false: the sampler before issue 11, kept for the variance comparisons).
+    bool sampleGlints = true;
 };
 
 constexpr int kCellCap = 100;  // the GLSL's cap on evaluated cells per LOD (spec §3 S3); hits are counted
@@ -117,18 +120,20 @@ inline int mirrorIndex(int i, int n) {
     return i < n ? i : p - 1 - i;
 }
 // Linear filtering between texel centres with GL_MIRRORED_REPEAT; u in texture units (1 = 4 sigma_o).
+// Inside [0, 1) (every glint lookup: u = |m| / (4 sigma_o) < 1) the texel pair is (i0, i0+1) with i0 in [-1, n-1], where
+// mirroring is a clamp to [0, n-1]: the same texels without the two integer divisions of mirrorIndex.
 inline float sampleLinear(const float* tex, int n, float u) {
     const float t = u * float(n) - 0.5f;
     const float fl = std::floor(t);
     const float f = t - fl;
     const int i0 = int(fl);
+    if (i0 >= -1 && i0 < n) return (1.f - f) * tex[std::max(i0, 0)] + f * tex[std::min(i0 + 1, n - 1)];
     return (1.f - f) * tex[mirrorIndex(i0, n)] + f * tex[mirrorIndex(i0 + 1, n)];
 }
 // textureGrad on one dictionary row (127 floats): isotropic GL LOD mu = log2(R max(|g1|, |g2|)), clamped to
 // [0, log2 R]; mu <= 0: MIP 0 linear; else blend MIPs floor(mu) and floor(mu)+1 by frac(mu).
-inline float textureGrad1D(const float* row, float u, float g1, float g2) {
-    const float rho = float(kRes) * std::max(std::abs(g1), std::abs(g2));
-    if (!(rho > 1.f)) return sampleLinear(row, kRes, u);
+// The filtered branch (rho = R max(|g1|, |g2|) > 1) on its own, for callers that already have the MIP-0 value.
+inline float textureGradFiltered(const float* row, float u, float rho) {
     const float mu = std::min(std::log2(rho), float(kMips - 1));
     const float m0f = std::floor(mu);
     const int m0 = int(m0f);
@@ -137,6 +142,45 @@ inline float textureGrad1D(const float* row, float u, float g1, float g2) {
     if (m0 >= kMips - 1) return v0;
     const float v1 = sampleLinear(row + mipOffset(m0 + 1), mipRes(m0 + 1), u);
     return (1.f - f) * v0 + f * v1;
+}
+inline float textureGrad1D(const float* row, float u, float g1, float g2) {
+    const float rho = float(kRes) * std::max(std::abs(g1), std::abs(g2));
+    if (!(rho > 1.f)) return sampleLinear(row, kRes, u);
+    return textureGradFiltered(row, u, rho);
+}
+
+// ---- per-thread memo of the cells' random numbers ---------------------------------------------------------------
+// Every random number of a cell is a function of its seed S alone (S4.2), whatever the material, and consecutive
+// shading points revisit the same cells (the samples of one pixel, neighbouring pixels, the coarser of the two
+// LODs): a direct-mapped table per thread keeps u_A, erfinv(2 u_z - 1), cos/sin theta and the marginal indices of
+// the last 4096 seeds. A memo of a pure function: results do not depend on its state, hence not on threads.
+struct CellMemoEntry {
+    uint32_t seed;
+    float uA, erfZ;  // u_A and erfinv(2 u_z - 1) (the material scales it by zeta sqrt 2 and adds l_c, S4.5)
+    float cosT, sinT;
+    uint8_t i, j, filled, pad;
+};
+struct CellMemo {
+    static constexpr int kBits = 12;
+    CellMemoEntry entries[1 << kBits];  // zero-initialised thread_local storage: filled = 0
+    const CellMemoEntry& get(uint32_t S) {
+        CellMemoEntry& e = entries[(S * 0x9E3779B1u) >> (32 - kBits)];
+        if (e.filled && e.seed == S) return e;
+        e.seed = S;
+        e.uA = hashUniform(13u * S);
+        e.erfZ = erfinvF(2.f * hashUniform(2171u * S) - 1.f);
+        const float theta = 2.f * kPi * hashUniform(S);  // as cellSdf: the same floats
+        e.cosT = std::cos(theta);
+        e.sinT = std::sin(theta);
+        e.i = uint8_t(std::min(int(float(kMarginals) * hashUniform(16807u * S)), kMarginals - 1));
+        e.j = uint8_t(std::min(int(float(kMarginals) * hashUniform(48271u * S)), kMarginals - 1));
+        e.filled = 1;
+        return e;
+    }
+};
+inline CellMemo& cellMemo() {
+    static thread_local CellMemo memo;
+    return memo;
 }
 
 // ---- S1/S2: footprint and LOD ---------------------------------------------------------------------------
@@ -175,22 +219,29 @@ struct SdfQuery {
     float pB = 0.f;         // P_B(h~)
 };
 
-// S4 (C20 Alg. 3 with the C21 matrix) and S5 (C21 Eqs. 15, 19): the SDF of cell (s, t) at level l.
+// The dictionary LOD k of a non-empty cell (S4.4-S4.5): l_d = l_c + zeta sqrt(2) erfinv(2 u_z - 1), k = clamp(round(l_d),
+// 0, L); k = L means converged (analytic P_B). S is the cell seed; zeta = 0 skips the hash (0 * erfinv = 0).
+inline int cellDictionaryLod(uint32_t S, float lc, float jitter) {
+    const float ld = jitter != 0.f ? lc + jitter * 1.41421356f * erfinvF(2.f * hashUniform(2171u * S) - 1.f) : lc;
+    return int(std::clamp(std::floor(ld + 0.5f), 0.f, float(kLevels)));
+}
+inline int marginalIndex(float u) { return std::min(int(float(kMarginals) * u), kMarginals - 1); }
+
+// S4 (C20 Alg. 3 with the C21 matrix) and S5 (C21 Eqs. 15, 19): the SDF of cell (s, t) at level l. The five uniforms
+// are those of cellRandom, hashed only when needed: u_A first (an empty cell costs one hash), then u_z.
 inline float cellSdf(const SdfQuery& q, int l, int s, int t) {
-    const CellRandom r = cellRandom(cellSeed(l, s, t));
-    if (r.uA > q.relArea) return 0.f;  // empty cell (sparse glints)
-    const float lc = q.lcBase + float(l);
-    const float ld = lc + q.jitter * 1.41421356f * erfinvF(2.f * r.uZ - 1.f);
-    const int k = int(std::clamp(std::floor(ld + 0.5f), 0.f, float(kLevels)));
+    const uint32_t S = cellSeed(l, s, t);
+    if (hashUniform(13u * S) > q.relArea) return 0.f;  // empty cell (sparse glints)
+    const int k = cellDictionaryLod(S, q.lcBase + float(l), q.jitter);
     if (k == kLevels) return q.pB;  // converged cell: analytic Beckmann (S4.6)
-    const float theta = 2.f * kPi * r.uTheta;
+    const float theta = 2.f * kPi * hashUniform(S);
     const float c = std::cos(theta), sn = std::sin(theta);
     // m_o = Rot(-theta) M^-1 h~ (C21 Eq. 5 with M_c = M Rot(theta))
     const float mx = c * q.mh.x + sn * q.mh.y, my = -sn * q.mh.x + c * q.mh.y;
     const float lim = float(4.0 * kSigmaO);
     if (std::abs(mx) >= lim || std::abs(my) >= lim) return 0.f;
-    const int i = std::min(int(float(kMarginals) * r.uI), kMarginals - 1);
-    const int j = std::min(int(float(kMarginals) * r.uJ), kMarginals - 1);
+    const int i = marginalIndex(hashUniform(16807u * S));
+    const int j = marginalIndex(hashUniform(48271u * S));
     const float ux = std::abs(mx) / lim, uy = std::abs(my) / lim;
     float px, py;
     if (q.ggaa) {
@@ -264,6 +315,272 @@ inline float patchSdf(const SdfQuery& q, Vec2 uv, const Footprint& fp) {
     if (!(w > 0.f)) return p0;
     const float p1 = levelSdf(q, std::min(i0 + 1, kLevels - 1), uv, fp.a1, fp.a2);
     return (1.f - w) * p0 + w * p1;
+}
+
+// ---- The cells of one shading point (wi-independent work, done once per lobe) -----------------------------------
+// Which cells the footprint covers, their EWA weights W, the LOD blend, and each cell's random numbers (u_A, k, theta,
+// i, j) depend on uv and the footprint only, not on wi. A shading point asks several queries (one per light, the BSDF
+// sample, its MIS evaluation), so the lobe computes them once and each query is one pass over the stored cells:
+// per level, sum_c W_c P_c(h~) / sum_c W_c over the visited cells (S3.6), then the LOD blend (S2). The sums run over
+// the same terms in the same order as levelSdf/patchSdf (empty cells and cells zeroed by S4.8 add an exact 0), so
+// the result is bit-identical to the per-query pipeline. Sampling uses the normalised weights
+// w_c = (blend weight) W_c / sum_level W of the non-empty cells.
+struct GlintCell {
+    float weight;         // W_c (EWA weight, unnormalised)
+    float cosT, sinT;     // Rot(theta_c), theta_c = 2 pi u_theta
+    uint16_t rowX, rowY;  // k_c * N + i_c and k_c * N + j_c: the dictionary rows; rowX = kConverged: k = L (P_B)
+    uint8_t loX, hiX, loY, hiY;  // the rows' nonzero MIP-0 texels (rowSupport)
+    static constexpr uint16_t kConverged = 0xffff;
+};
+
+// First and last nonzero MIP-0 texel of every dictionary row (2 bytes per row, rows of Dictionary::instance();
+// another dictionary gets the full range 0..R-1). A low-k marginal is a few narrow lobes: most of its texels are 0.
+const uint8_t* rowSupport(const Dictionary& dict);
+
+// Whether the MIP-0 linear lookup at u in [0, 1) (sampleLinear: texels max(i0, 0) and min(i0 + 1, R - 1)) reads only
+// zero texels of a row whose nonzero texels are [lo, hi]: then it returns exactly 0, without touching the row.
+inline bool lookupOutsideSupport(float u, int lo, int hi) {
+    const int i0 = int(std::floor(u * float(kRes) - 0.5f));
+    return std::min(i0 + 1, kRes - 1) < lo || std::max(i0, 0) > hi;
+}
+
+// The two SDFs one query needs: the GGAA-filtered one (what eval returns) and the unfiltered one (the density the
+// glint sampler draws from); equal when GGAA is off.
+struct GlintSdfPair {
+    float filtered = 0.f, unfiltered = 0.f;
+};
+
+struct GlintCellSet {
+    static constexpr int kMaxCells = 2 * kCellCap;  // two LODs, each capped by forEachCell
+    bool footprintValid = false;  // false: |a2| = 0, P = P_B (spec S1 recommendation)
+    int count = 0;                // non-empty cells (dictionary and converged) in cells[0, count)
+    int levels = 0;               // 1 or 2 LODs
+    int levelEnd[2] = {0, 0};     // cells of level n: [levelEnd[n-1], levelEnd[n])
+    float sumW[2] = {0.f, 0.f};   // sum of W over every visited cell of the level (empty ones included)
+    float blend = 0.f;            // w: P = (1 - w) P_lev(i0) + w P_lev(i0 + 1)
+    float convergedWeight = 0.f;  // sum of the normalised weights of the converged cells
+    float keptWeight = 0.f;       // sum of all normalised weights = the integral of the unfiltered P (spec §4.6)
+    GlintCell cells[kMaxCells];   // left uninitialised until build()
+
+    // The sampling weight of cell n: (blend weight of its level) W / sum W.
+    float normalisedWeight(int n) const {
+        const int lev = n < levelEnd[0] ? 0 : 1;
+        return (lev == 0 ? (levels == 2 ? 1.f - blend : 1.f) : blend) * cells[n].weight / sumW[lev];
+    }
+
+    // S2 + S3 + S4.1-S4.9 without h~. Empty cells (u_A > A) are not stored (they only normalise).
+    void build(const Dictionary& dict, const GlintParams& p, Vec2 uv, const Footprint& fp) {
+        count = 0;
+        levels = 0;
+        convergedWeight = keptWeight = 0.f;
+        footprintValid = fp.valid;
+        if (!fp.valid) {
+            convergedWeight = keptWeight = 1.f;
+            return;
+        }
+        const float i0f = std::floor(fp.lodP);
+        const int i0 = int(i0f);
+        blend = fp.lodP - i0f;
+        CellMemo& memo = cellMemo();  // one thread-local access per shading point
+        const uint8_t* support = rowSupport(dict);
+        addLevel(memo, support, p, i0, uv, fp);
+        if (blend > 0.f) addLevel(memo, support, p, std::min(i0 + 1, kLevels - 1), uv, fp);
+        for (int n = 0; n < count; ++n) {
+            if (!(sumW[n < levelEnd[0] ? 0 : 1] > 0.f)) continue;
+            const float w = normalisedWeight(n);
+            keptWeight += w;
+            if (cells[n].rowX == GlintCell::kConverged) convergedWeight += w;
+        }
+    }
+
+    // P(h~) from mh = M^-1 h~ and the GGAA kernel gradients before the cell rotation (SdfQuery::gx, gy), pB = P_B(h~).
+    // kUnfiltered: also the unfiltered P (for the sampling pdf).
+    template <bool kUnfiltered>
+    GlintSdfPair evaluate(const Dictionary& dict, const GlintShape& shape, Vec2 mh, float pB, bool ggaa, Vec2 gx,
+                          Vec2 gy) const {
+        GlintSdfPair r;
+        if (!footprintValid) {
+            r.filtered = r.unfiltered = pB;
+            return r;
+        }
+        const float lim = float(4.0 * kSigmaO);
+        // Whole-query early-out: max(|m.x|, |m.y|) >= |m| / sqrt(2) = |mh| / sqrt(2) in every rotation, so when
+        // |mh|^2 >= 2 lim^2 every dictionary cell is zeroed by S4.8 and only the converged cells remain.
+        // The 1e-5 margin covers the rounding of the rotation, so skipping is exact.
+        const bool dictionaryZero = !(glm::dot(mh, mh) < 2.00002f * lim * lim);
+        const float* base = dict.data().data();
+        float levelF[2] = {0.f, 0.f}, levelU[2] = {0.f, 0.f};
+        for (int lev = 0; lev < levels; ++lev) {
+            const int begin = lev == 0 ? 0 : levelEnd[0], end = levelEnd[lev];
+            // Pass 1: rotation, the S4.8 test, and the support test (a lookup that reads only zero texels is 0; with
+            // GGAA only where the kernel is under one texel, rho <= 1, so MIP 0 is what is read). The surviving
+            // cells' texels are prefetched: the rows (1.5 MB in all) are read at random, so the lookups are bound by
+            // memory latency, not arithmetic. Order is kept: the sums below add the same terms as levelSdf.
+            struct Lookup {
+                int cell;
+                float ux, uy, rhoX, rhoY;
+                bool outX, outY;  // the axis's MIP-0 lookup reads only zeros
+            };
+            Lookup live[kCellCap];
+            int nLive = 0;
+            for (int n = begin; n < end; ++n) {
+                const GlintCell& c = cells[n];
+                if (c.rowX == GlintCell::kConverged) {
+                    live[nLive++] = {n, 0.f, 0.f, 0.f, 0.f, false, false};
+                    continue;
+                }
+                if (dictionaryZero) continue;
+                const float mx = c.cosT * mh.x + c.sinT * mh.y, my = -c.sinT * mh.x + c.cosT * mh.y;
+                if (std::abs(mx) >= lim || std::abs(my) >= lim) continue;  // S4.8
+                const float ux = std::abs(mx) / lim, uy = std::abs(my) / lim;
+                const bool outX = lookupOutsideSupport(ux, c.loX, c.hiX), outY = lookupOutsideSupport(uy, c.loY, c.hiY);
+                float rhoX = 0.f, rhoY = 0.f;
+                if (ggaa) {
+                    // GGAA (S5.3-S5.4): kernel s_K Rot(-theta) M^-1 d / (4 sigma_o), x components to the x marginal.
+                    const float gxx = c.cosT * gx.x + c.sinT * gx.y, gxy = -c.sinT * gx.x + c.cosT * gx.y;
+                    const float gyx = c.cosT * gy.x + c.sinT * gy.y, gyy = -c.sinT * gy.x + c.cosT * gy.y;
+                    rhoX = float(kRes) * std::max(std::abs(gxx), std::abs(gyx));
+                    rhoY = float(kRes) * std::max(std::abs(gxy), std::abs(gyy));
+                }
+                // Filtered and unfiltered products are both 0 when one axis reads only zeros at MIP 0 with rho <= 1.
+                if ((outX && !(rhoX > 1.f)) || (outY && !(rhoY > 1.f))) continue;
+                live[nLive++] = {n, ux, uy, rhoX, rhoY, outX, outY};
+                __builtin_prefetch(base + size_t(c.rowX) * kRowFloats + int(ux * float(kRes)));
+                __builtin_prefetch(base + size_t(c.rowY) * kRowFloats + int(uy * float(kRes)));
+            }
+            float sumF = 0.f, sumU = 0.f;
+            for (int n = 0; n < nLive; ++n) {
+                const Lookup& lk = live[n];
+                const GlintCell& c = cells[lk.cell];
+                if (c.rowX == GlintCell::kConverged) {  // S4.6
+                    sumF += c.weight * pB;
+                    if constexpr (kUnfiltered) sumU += c.weight * pB;
+                    continue;
+                }
+                const bool outX = lk.outX, outY = lk.outY;
+                const float ux = lk.ux, uy = lk.uy;
+                const float* rx = base + size_t(c.rowX) * kRowFloats;
+                const float* ry = base + size_t(c.rowY) * kRowFloats;
+                const float px = outX ? 0.f : sampleLinear(rx, kRes, ux);
+                if (!ggaa) {
+                    if (px == 0.f) continue;
+                    const float v = shape.detMinv * px * sampleLinear(ry, kRes, uy);  // C21 Eq. 4
+                    sumF += c.weight * v;
+                    if constexpr (kUnfiltered) sumU += c.weight * v;
+                    continue;
+                }
+                // A kernel under one texel (rho <= 1) reads MIP 0 as the unfiltered lookup does: reuse that value.
+                const float pxF = lk.rhoX > 1.f ? textureGradFiltered(rx, ux, lk.rhoX) : px;
+                if (pxF == 0.f && px == 0.f) continue;
+                const float py = outY ? 0.f : sampleLinear(ry, kRes, uy);
+                const float pyF = lk.rhoY > 1.f ? textureGradFiltered(ry, uy, lk.rhoY) : py;
+                sumF += c.weight * (shape.detMinv * pxF * pyF);  // C21 Eq. 15
+                if constexpr (kUnfiltered) sumU += c.weight * (shape.detMinv * px * py);
+            }
+            levelF[lev] = sumW[lev] > 0.f ? sumF / sumW[lev] : 0.f;
+            levelU[lev] = sumW[lev] > 0.f ? sumU / sumW[lev] : 0.f;
+        }
+        if (levels == 2) {  // S2 LOD blend, as patchSdf
+            r.filtered = (1.f - blend) * levelF[0] + blend * levelF[1];
+            r.unfiltered = (1.f - blend) * levelU[0] + blend * levelU[1];
+        } else {
+            r.filtered = levelF[0];
+            r.unfiltered = levelU[0];
+        }
+        if (!kUnfiltered) r.unfiltered = 0.f;
+        return r;
+    }
+
+    // Draws a half slope h~ with density P_unfiltered(h~) / keptWeight (spec S4.7 inverted): a cell with probability
+    // w_c / keptWeight (both LODs at once: the blend weight is part of w_c), then m in the cell's space from the two 1D
+    // marginals by inverse CDF (density p_i(|m.x|) p_j(|m.y|) with a random sign per axis), h~ = M_c m = M Rot(theta) m,
+    // whose density is |det M_c^-1| p_i p_j = the cell's SDF; converged cells draw from P_B. u in [0,1)^2; u.x is
+    // reused (rescaled) for the cell choice and the x marginal, u.y for the y marginal.
+    bool sampleSlope(const Dictionary& dict, const GlintShape& shape, Vec2 u, Vec2& slope) const;
+
+private:
+    void addLevel(CellMemo& memo, const uint8_t* support, const GlintParams& p, int l, Vec2 uv, const Footprint& fp) {
+        const float lc = p.logDensity / 1.38629436f - float(kLevels - 1) + float(l);  // S4.4
+        float sw = 0.f;
+        const float jitterScale = p.jitter * 1.41421356f;
+        forEachCell(l, uv, fp.a1, fp.a2, [&](int s, int t, float W) {
+            sw += W;
+            const CellMemoEntry& r = memo.get(cellSeed(l, s, t));
+            if (r.uA > p.relArea) return;  // empty cell: it only normalises
+            // k as cellDictionaryLod computes it (same operations, so the same float result)
+            const float ld = p.jitter != 0.f ? lc + jitterScale * r.erfZ : lc;
+            const int k = int(std::clamp(std::floor(ld + 0.5f), 0.f, float(kLevels)));
+            GlintCell& c = cells[count++];
+            c.weight = W;
+            if (k == kLevels) {
+                c.rowX = c.rowY = GlintCell::kConverged;
+                return;
+            }
+            c.cosT = r.cosT;
+            c.sinT = r.sinT;
+            c.rowX = uint16_t(k * kMarginals + r.i);
+            c.rowY = uint16_t(k * kMarginals + r.j);
+            c.loX = support[2 * c.rowX], c.hiX = support[2 * c.rowX + 1];
+            c.loY = support[2 * c.rowY], c.hiY = support[2 * c.rowY + 1];
+        });
+        sumW[levels] = sw;
+        levelEnd[levels++] = count;
+    }
+};
+
+// Half slope from the limiting correlated Beckmann lobe N(0, Sigma) (C21 Eq. 16): h~ = L z with L the Cholesky factor
+// [[sx, 0], [rho sy, sy sqrt(1-rho^2)]] and z from Box-Muller; its density is P_B(h~).
+inline Vec2 sampleBeckmannSlope(const GlintShape& s, const Vec2& u) {
+    const float r = std::sqrt(-2.f * std::log(std::max(1.f - u.x, 1e-12f)));
+    const float phi = 2.f * kPi * u.y;
+    const float z1 = r * std::cos(phi), z2 = r * std::sin(phi);
+    return {s.sx * z1, s.sy * (s.rho * z1 + s.sq * z2)};
+}
+
+// Splits a uniform u in [0,1) at 1/2 into a sign and a fresh uniform in [0,1).
+inline float splitSign(float& u) {
+    const float v = u * 2.f;
+    if (v < 1.f) {
+        u = v;
+        return 1.f;
+    }
+    u = std::min(v - 1.f, 0.99999994f);
+    return -1.f;
+}
+
+inline bool GlintCellSet::sampleSlope(const Dictionary& dict, const GlintShape& shape, Vec2 u, Vec2& slope) const {
+    if (!(keptWeight > 0.f)) return false;
+    if (!footprintValid) {
+        slope = sampleBeckmannSlope(shape, u);
+        return true;
+    }
+    float r = u.x * keptWeight;
+    int n = 0, last = -1;
+    float w = 0.f;
+    for (; n < count; ++n) {  // rounding: the last cell with weight takes the rest
+        if (!(sumW[n < levelEnd[0] ? 0 : 1] > 0.f)) continue;
+        w = normalisedWeight(n);
+        last = n;
+        if (r < w) break;
+        r -= w;
+    }
+    if (last < 0) return false;
+    if (n == count) n = last;
+    const GlintCell& c = cells[n];
+    u.x = std::clamp(r / w, 0.f, 0.99999994f);
+    if (c.rowX == GlintCell::kConverged) {
+        slope = sampleBeckmannSlope(shape, u);
+        return true;
+    }
+    const float sx = splitSign(u.x), sy = splitSign(u.y);
+    const int kx = c.rowX / kMarginals, ky = c.rowY / kMarginals;
+    const float mx = sx * dict.sampleMarginal(kx, c.rowX - kx * kMarginals, u.x);
+    const float my = sy * dict.sampleMarginal(ky, c.rowY - ky * kMarginals, u.y);
+    // mh = Rot(theta) m, h~ = M mh with M = (1/sigma_o) [[sx sqrt(1-rho^2), rho sx], [0, sy]] (C21 Eq. 18).
+    const float ax = c.cosT * mx - c.sinT * my, ay = c.sinT * mx + c.cosT * my;
+    const float so = float(kSigmaO);
+    slope = Vec2((shape.sx * shape.sq * ax + shape.rho * shape.sx * ay) / so, shape.sy * ay / so);
+    return true;
 }
 
 // Derivative of the GGAA quantity from dh: the projected half vector (h_x, h_y) (C21 Eq. 21) or the half slope
@@ -354,9 +671,63 @@ struct GlintEvalInputs {
     Vec2 uv{0.f}, duvdx{0.f}, duvdy{0.f};  // already multiplied by the uv scale
     GlintDifferentials diff;
 };
+
+// One query against the cells of its shading point: f cos without Fresnel (GGAA-filtered P when GGAA is on) and,
+// for the sampling pdf, the unfiltered P and P_B at the same half vector.
+struct GlintQueryValue {
+    bool valid = false;  // h passed S0 (wo.z, wi.z, h.z, wo.h > 0)
+    Vec3 h{0.f};
+    float woh = 0.f;
+    float fcos = 0.f;         // G D / (4 wo.z)
+    float pUnfiltered = 0.f;  // unfiltered patch SDF at h~ (only with wantPdf)
+    float pB = 0.f;           // P_B(h~)
+};
+template <bool kWantPdf>
+inline GlintQueryValue glintQuery(const Dictionary& dict, const GlintParams& p, const GlintShape& shape,
+                                  const GlintEvalInputs& in, const GlintCellSet& cells, const Vec3& wo, const Vec3& wi,
+                                  float lightDistance) {
+    GlintQueryValue v;
+    if (wo.z <= 0.f || wi.z <= 0.f) return v;
+    const Vec3 hs = wo + wi;
+    const float len = std::sqrt(glm::dot(hs, hs));
+    if (!(len > 0.f)) return v;
+    const Vec3 h = hs / len;
+    const float woh = glm::dot(wo, h), wih = glm::dot(wi, h);
+    if (h.z <= 0.f || woh <= 0.f) return v;
+    v.valid = true;
+    v.h = h;
+    v.woh = woh;
+    const Vec2 slope(-h.x / h.z, -h.y / h.z);
+    v.pB = beckmannSdf(slope, shape);
+    if (wih <= 0.f && !kWantPdf) return v;
+    Vec2 gx(0.f), gy(0.f);
+    if (p.ggaa && wih > 0.f) {
+        const float k = p.kernelScale / float(4.0 * kSigmaO);  // g = s_K M^-1 d / (4 sigma_o) (S5.2)
+        gx = shape.applyInv(ggaaDerivative(in.diff, 0, p.mode, wo, wi, h, len, lightDistance)) * k;
+        gy = shape.applyInv(ggaaDerivative(in.diff, 1, p.mode, wo, wi, h, len, lightDistance)) * k;
+    }
+    const GlintSdfPair P = cells.evaluate<kWantPdf>(dict, shape, shape.applyInv(slope), v.pB, p.ggaa, gx, gy);
+    v.pUnfiltered = P.unfiltered;
+    if (wih > 0.f) {
+        const float hz2 = h.z * h.z;
+        const float D = P.filtered / (hz2 * hz2);
+        const float G = std::min(1.f, 2.f * h.z * wo.z / woh) * std::min(1.f, 2.f * h.z * wi.z / wih);
+        v.fcos = G * D / (4.f * wo.z);
+    }
+    return v;
+}
+
+// One evaluation without a lobe (tests, bench, tools): the per-query pipeline, which for a single query is cheaper
+// than building a GlintCellSet (the lobe's path, bit-identical: GlintCells tests).
 inline float glintFCosScalar(const Dictionary& dict, const GlintParams& p, const GlintShape& shape,
                              const GlintEvalInputs& in, const Vec3& wo, const Vec3& wi, Vec3* hOut = nullptr,
-                             float lightDistance = std::numeric_limits<float>::infinity()) {
+                             float lightDistance = std::numeric_limits<float>::infinity());
+
+// The per-query pipeline of spec §3 as written (patchSdf over cellSdf for every query): the reference the cell set is
+// tested against, and the bench's "per query" baseline.
+inline float glintFCosReference(const Dictionary& dict, const GlintParams& p, const GlintShape& shape,
+                                const GlintEvalInputs& in, const Vec3& wo, const Vec3& wi,
+                                float lightDistance = std::numeric_limits<float>::infinity(), Vec3* hOut = nullptr) {
     if (wo.z <= 0.f || wi.z <= 0.f) return 0.f;
     const Vec3 hs = wo + wi;
     const float len = std::sqrt(glm::dot(hs, hs));
@@ -371,12 +742,27 @@ inline float glintFCosScalar(const Dictionary& dict, const GlintParams& p, const
         dy = ggaaDerivative(in.diff, 1, p.mode, wo, wi, h, len, lightDistance);
     }
     const SdfQuery q = makeQuery(dict, p, shape, h, dx, dy);
-    const Footprint fp = footprint(in.duvdx, in.duvdy, p.maxAniso);
-    const float P = patchSdf(q, in.uv, fp);
+    const float P = patchSdf(q, in.uv, footprint(in.duvdx, in.duvdy, p.maxAniso));
     const float hz2 = h.z * h.z;
     const float D = P / (hz2 * hz2);
     const float G = std::min(1.f, 2.f * h.z * wo.z / woh) * std::min(1.f, 2.f * h.z * wi.z / wih);
     return G * D / (4.f * wo.z);
+}
+
+// The lobe's path for one query: builds the cells and answers one query (tests compare it with the reference).
+inline float glintFCosCells(const Dictionary& dict, const GlintParams& p, const GlintShape& shape,
+                            const GlintEvalInputs& in, const Vec3& wo, const Vec3& wi,
+                            float lightDistance = std::numeric_limits<float>::infinity()) {
+    if (wo.z <= 0.f || wi.z <= 0.f) return 0.f;
+    GlintCellSet cells;
+    cells.build(dict, p, in.uv, footprint(in.duvdx, in.duvdy, p.maxAniso));
+    return glintQuery<false>(dict, p, shape, in, cells, wo, wi, lightDistance).fcos;
+}
+
+inline float glintFCosScalar(const Dictionary& dict, const GlintParams& p, const GlintShape& shape,
+                             const GlintEvalInputs& in, const Vec3& wo, const Vec3& wi, Vec3* hOut,
+                             float lightDistance) {
+    return glintFCosReference(dict, p, shape, in, wo, wi, lightDistance, hOut);
 }
 
 // Reference limit (spec S7, "Limit as density -> infinity"): Cook-Torrance with P_B and the same V-cavity G.
@@ -440,7 +826,18 @@ inline Vec3 leanNormal(const Vec3& t, const Vec3& b, const Vec3& n, Vec2 mean, c
     return m;
 }
 
-// The glint lobe of the renderer: eval = F(wo.h) * glintFCosScalar; sample/pdf: the limiting Beckmann lobe.
+// Fraction of the lobe's samples drawn from the limiting Beckmann lobe instead of the glints. It keeps the pdf > 0
+// wherever the eval can be > 0: the GGAA-filtered P is nonzero where the unfiltered P (the glint sampling density)
+// can be 0, and MIS needs pdf > 0 there to stay unbiased.
+constexpr float kGlintBeckmannFraction = 0.15f;
+
+// The glint lobe of the renderer: eval = F(wo.h) * f cos with the GGAA-filtered P. Sampling (issue 11 item 3): a
+// mixture of the glint distribution of this shading point (GlintCellSet::sampleSlope) and, with probability
+// kGlintBeckmannFraction, the limiting Beckmann lobe. Exact pdf, with dw_h = d(slope) h_z^3 (D h_z dw_h = P22 d(slope))
+// and dw_i = 4 (wo.h) dw_h:
+//   pdf(wi) = [beta P_B(h~) + (1 - beta) P_unfiltered(h~) / keptWeight] / h_z^3 / (4 wo.h).
+// The cells are built on the first query and shared by every later query of the shading point (the lobe lives in
+// one thread's scratch arena for one shading point).
 class GlintLobe final : public BsdfLobe {
 public:
     GlintLobe(const Dictionary& dict, const GlintParams& p, const GlintEvalInputs& in, const Fresnel& fresnel)
@@ -449,16 +846,28 @@ public:
     using BsdfLobe::sample;
     LobeValue evalPdf(const LobeQuery& q) const override {
         LobeValue v;
-        Vec3 h;
-        const float f = glintFCosScalar(dict_, p_, shape_, in_, q.wo, q.wi, &h, q.lightDistance);
-        if (f > 0.f) v.f = fresnel_.eval(glm::dot(q.wo, h)) * f;
-        v.pdf = beckmannHalfPdf(shape_, q.wo, q.wi);
+        const GlintCellSet& c = cells();
+        const GlintQueryValue g = glintQuery<true>(dict_, p_, shape_, in_, c, q.wo, q.wi, q.lightDistance);
+        if (!g.valid) return v;
+        if (g.fcos > 0.f) v.f = fresnel_.eval(g.woh) * g.fcos;
+        const float beta = beckmannFraction();
+        const float glint = c.keptWeight > 0.f ? g.pUnfiltered / c.keptWeight : 0.f;
+        v.pdf = (beta * g.pB + (1.f - beta) * glint) / (g.h.z * g.h.z * g.h.z * 4.f * g.woh);
         return v;
     }
     bool sample(const LobeQuery& q, const Vec2& u, Vec3& wi) const override {
         const Vec3& wo = q.wo;
         if (wo.z <= 0.f) return false;
-        const Vec3 h = sampleBeckmannHalf(shape_, u);
+        const float beta = beckmannFraction();
+        Vec2 uu = u, slope;
+        if (uu.x < beta) {
+            uu.x = std::min(uu.x / beta, 0.99999994f);
+            slope = sampleBeckmannSlope(shape_, uu);
+        } else {
+            uu.x = std::min((uu.x - beta) / (1.f - beta), 0.99999994f);
+            if (!cells().sampleSlope(dict_, shape_, uu, slope)) return false;
+        }
+        const Vec3 h = glm::normalize(Vec3(-slope.x, -slope.y, 1.f));
         const float woh = glm::dot(wo, h);
         if (woh <= 0.f) return false;
         wi = 2.f * woh * h - wo;
@@ -478,6 +887,19 @@ public:
     }
     const GlintParams& params() const { return p_; }
     const GlintEvalInputs& inputs() const { return in_; }
+    // The footprint's cells (built on first use): shared with the area-light integral of the same shading point.
+    const GlintCellSet& cells() const {
+        if (!cellsBuilt_) {
+            cells_.build(dict_, p_, in_.uv, footprint(in_.duvdx, in_.duvdy, p_.maxAniso));
+            cellsBuilt_ = true;
+        }
+        return cells_;
+    }
+    // The mixture weight of the Beckmann lobe: kGlintBeckmannFraction, or 1 when every cell is empty or glint
+    // sampling is off.
+    float beckmannFraction() const {
+        return p_.sampleGlints && cells().keptWeight > 0.f ? kGlintBeckmannFraction : 1.f;
+    }
 
 private:
     const Dictionary& dict_;
@@ -485,6 +907,8 @@ private:
     GlintShape shape_;
     GlintEvalInputs in_;
     Fresnel fresnel_;
+    mutable bool cellsBuilt_ = false;
+    mutable GlintCellSet cells_;
 };
 
 }  // namespace specula::glint
