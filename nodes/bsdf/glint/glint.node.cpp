@@ -137,7 +137,10 @@ void reg(NodeRegistry& r) {
     s.id = "bsdf.glint";
     s.category = "bsdf";
     s.doc = "Procedural glints (Chermain et al. 2020) with geometric glint anti-aliasing and slope correlation "
-            "(Chermain et al. 2021); converges to Cook-Torrance with a correlated Beckmann NDF as density grows.";
+            "(Chermain et al. 2021); converges to Cook-Torrance with a correlated Beckmann NDF as density grows. "
+            "Quad lights in closed form on the CPU (polygon queries, render.area_lights \"ltc\"): each EWA cell's "
+            "slope distribution integrated over the light's half-slope region, without GGAA (glint_area.h). The GLSL "
+            "function does not answer polygon queries: it returns partial = true and the host samples the light.";
     s.inputs = kParams.ports();
     s.outputs = kOutputs.ports();
     s.flags = kNeedsDerivatives;

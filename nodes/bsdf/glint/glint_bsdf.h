@@ -176,21 +176,38 @@ struct SdfQuery {
 };
 
 // S4 (C20 Alg. 3 with the C21 matrix) and S5 (C21 Eqs. 15, 19): the SDF of cell (s, t) at level l.
-inline float cellSdf(const SdfQuery& q, int l, int s, int t) {
+// The per-cell draws of S4.1-S4.5 that do not depend on h~ (shared with the area-light integral, glint_area.h):
+// occupancy, dictionary level k (k = L: converged), rotation theta and the marginal indices i, j.
+struct CellDraw {
+    bool empty = true, converged = false;
+    int k = 0, i = 0, j = 0;
+    float theta = 0.f;
+};
+inline CellDraw drawCell(const SdfQuery& q, int l, int s, int t) {
+    CellDraw d;
     const CellRandom r = cellRandom(cellSeed(l, s, t));
-    if (r.uA > q.relArea) return 0.f;  // empty cell (sparse glints)
+    if (r.uA > q.relArea) return d;  // empty cell (sparse glints)
+    d.empty = false;
     const float lc = q.lcBase + float(l);
     const float ld = lc + q.jitter * 1.41421356f * erfinvF(2.f * r.uZ - 1.f);
-    const int k = int(std::clamp(std::floor(ld + 0.5f), 0.f, float(kLevels)));
-    if (k == kLevels) return q.pB;  // converged cell: analytic Beckmann (S4.6)
-    const float theta = 2.f * kPi * r.uTheta;
-    const float c = std::cos(theta), sn = std::sin(theta);
+    d.k = int(std::clamp(std::floor(ld + 0.5f), 0.f, float(kLevels)));
+    d.converged = d.k == kLevels;
+    d.theta = 2.f * kPi * r.uTheta;
+    d.i = std::min(int(float(kMarginals) * r.uI), kMarginals - 1);
+    d.j = std::min(int(float(kMarginals) * r.uJ), kMarginals - 1);
+    return d;
+}
+
+inline float cellSdf(const SdfQuery& q, int l, int s, int t) {
+    const CellDraw d = drawCell(q, l, s, t);
+    if (d.empty) return 0.f;
+    if (d.converged) return q.pB;  // converged cell: analytic Beckmann (S4.6)
+    const int k = d.k, i = d.i, j = d.j;
+    const float c = std::cos(d.theta), sn = std::sin(d.theta);
     // m_o = Rot(-theta) M^-1 h~ (C21 Eq. 5 with M_c = M Rot(theta))
     const float mx = c * q.mh.x + sn * q.mh.y, my = -sn * q.mh.x + c * q.mh.y;
     const float lim = float(4.0 * kSigmaO);
     if (std::abs(mx) >= lim || std::abs(my) >= lim) return 0.f;
-    const int i = std::min(int(float(kMarginals) * r.uI), kMarginals - 1);
-    const int j = std::min(int(float(kMarginals) * r.uJ), kMarginals - 1);
     const float ux = std::abs(mx) / lim, uy = std::abs(my) / lim;
     float px, py;
     if (q.ggaa) {
@@ -476,6 +493,10 @@ public:
         out.push_back({"ggaa", {p_.ggaa ? 1.0 : 0.0}});
         out.push_back({"footprint_duv", {in_.duvdx.x, in_.duvdx.y, in_.duvdy.x, in_.duvdy.y}});
     }
+    // Quad lights (issue 11 item 2): the per-cell polygon integral and the shadow-ray direction (glint_area.cpp).
+    bool integratePolygon(const LobeQuery& q, const Vec3* vertices, int count, Color3& result) const override;
+    bool samplePolygon(const LobeQuery& q, const Vec3* vertices, int count, const Vec2& u, uint64_t seed,
+                       Vec3& wi) const override;
     const GlintParams& params() const { return p_; }
     const GlintEvalInputs& inputs() const { return in_; }
 
