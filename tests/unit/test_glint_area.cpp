@@ -11,10 +11,13 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <random>
 
 using namespace specula;
 using namespace specula::glint;
+
+constexpr double kPiD = 3.14159265358979323846;
 
 namespace {
 
@@ -188,7 +191,7 @@ TEST(GlintArea, CellMassIsExactOverPolygons) {
         EXPECT_NEAR(cellPolygonMass(dict, k, 5, 77, big, 4), 1.0, 2e-3) << "a marginal pair has unit mass";
     }
     EXPECT_NEAR(gaussianPolygonMass(big, 4), 1.0 - 4 * 0.5 * std::erfc(3.0 / (kSigmaO * std::sqrt(2.0))), 1e-6);
-    EXPECT_NEAR(gaussianPolygonMass(tri, 3), [&] {
+    const double gaussTri = [&] {
         double s = 0;
         const int N = 1500;
         for (int a = 0; a < N; ++a)
@@ -200,7 +203,8 @@ TEST(GlintArea, CellMassIsExactOverPolygons) {
                 if (inside) s += std::exp(-(x * x + y * y) / (2 * kSigmaO * kSigmaO));
             }
         return s * 0.64 / (double(N) * N) / (2 * kPiD * kSigmaO * kSigmaO);
-    }(), 1e-4);
+    }();
+    EXPECT_NEAR(gaussianPolygonMass(tri, 3), gaussTri, 1e-4);
 }
 
 TEST(GlintArea, PolygonIntegralMatchesMonteCarloOfThePointEvaluation) {
@@ -215,6 +219,17 @@ TEST(GlintArea, PolygonIntegralMatchesMonteCarloOfThePointEvaluation) {
         const int kind = int(n % 3);
         const double ref = monteCarlo(c.quad, 256, 100 + n, [&](const Vec3& wi) { return pointFCos(c, wi); });
         const double ana = areaIntegral(c);
+        if (std::getenv("GLINT_AREA_DEBUG")) {
+            GlintAreaSettings fine;
+            fine.chordTolerance = 1e-5f;
+            fine.maxDepth = kMaxChordDepth;
+            const double ref2 = monteCarlo(c.quad, 1024, 500 + n, [&](const Vec3& wi) { return pointFCos(c, wi); });
+            const Vec3 ci = glm::normalize(c.quad.centre);
+            const Vec3 hc = glm::normalize(ci + c.wo);
+            std::printf("    fine chords %.5g, MC 1024^2 %.5g; wo.z %.3f wi.z %.3f h~ (%.3f %.3f) size %.3f dist %.2f\n",
+                        areaIntegral(c, fine), ref2, c.wo.z, ci.z, -hc.x / hc.z, -hc.y / hc.z,
+                        2 * glm::length(c.quad.e1), glm::length(c.quad.centre));
+        }
         sumA[kind] += ana, sumR[kind] += ref;
         if (ref > 1e-4) {
             const double rel = std::abs(ana / ref - 1.0);
@@ -290,17 +305,23 @@ TEST(GlintArea, ConvergedLimitIsTheBeckmannLobeIntegral) {
 }
 
 TEST(GlintArea, ChordSubdivisionErrorIsSmall) {
-    // The curved image of the light's edges in half-slope space: integrals with 0.05-rad chords (the default) against
-    // 0.005-rad chords, converged lobe (smooth) and glints.
+    // The curved image of the light's edges in half-slope space: integrals with the default chord tolerance (3e-4 in
+    // M^-1 space) against 3e-5.
     auto cases = randomCases(24, 3);
     GlintAreaSettings fine;
-    fine.maxChordAngle = 0.005f;
+    fine.chordTolerance = 3e-5f;
+    fine.maxDepth = kMaxChordDepth;
     double maxRel = 0;
     for (Case& c : cases) {
         const double a = areaIntegral(c), b = areaIntegral(c, fine);
+        const GlintShape shape = GlintShape::make(c.p.sigmaX, c.p.sigmaY, c.p.rho);
+        DVec2 region[kMaxRegionVertices];
+        const int na = halfSlopeRegion(c.wo, c.quad.v, 4, shape, {}, region);
+        const int nb = halfSlopeRegion(c.wo, c.quad.v, 4, shape, fine, region);
+        std::printf("  %-6s %.5g %.5g vertices %d %d\n", c.size, a, b, na, nb);
         if (b > 1e-4) maxRel = std::max(maxRel, std::abs(a / b - 1));
     }
-    std::printf("chords 0.05 vs 0.005 rad: max rel diff %.5f\n", maxRel);
+    std::printf("chord tolerance 3e-4 vs 3e-5: max rel diff %.5f\n", maxRel);
     EXPECT_LT(maxRel, 0.005);
 }
 

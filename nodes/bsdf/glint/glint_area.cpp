@@ -5,12 +5,17 @@
 #include "core/ltc/ltc.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <vector>
 
 namespace specula::glint {
 
 namespace {
 
+using DVec4 = glm::dvec4;
+
+constexpr double kPiD = 3.14159265358979323846;
 constexpr double kLim = 4.0 * kSigmaO;  // support of the cell marginals: |m| < 4 σ_o
 constexpr double kDeltaD = kDelta;      // texel spacing (texel centres at (n + 1/2) δ)
 
@@ -36,20 +41,33 @@ inline void gridCrossings(double x0, double dx, double* t, int& n) {
     add(kLim);
 }
 
-// One edge's share of (A2): -∫ p_i(x(t)) F_j(y(t)) dx over the part of the edge with |x| < 4 σ_o.
-double edgeMass(const Dictionary& dict, int k, int i, int j, DVec2 a, DVec2 b) {
+// One edge's share of the cell's mass and first moments over a CCW polygon Q, by Green's theorem:
+//   mass = ∫∫ p_i p_j = -∮ p_i(x) F_j(y) dx,   ∫∫ x p_i p_j = -∮ x p_i(x) F_j(y) dx,   ∫∫ y p_i p_j = ∮ F_i(x) y p_j(y) dy.
+// Between breakpoints of both texel grids the mass integrand is a cubic (Simpson exact); the moments' are quartics
+// (Simpson's error on pieces of at most one texel is ~1e-5 relative): they only place the smooth factor (A1).
+DVec3 edgeMoments(const Dictionary& dict, int k, int i, int j, DVec2 a, DVec2 b) {
     const double dx = b.x - a.x, dy = b.y - a.y;
-    if (dx == 0.0) return 0.0;
-    // The t-range where |x| < 4 σ_o (outside it p_i = 0).
-    double t0 = (-kLim - a.x) / dx, t1 = (kLim - a.x) / dx;
-    if (t0 > t1) std::swap(t0, t1);
-    t0 = std::max(t0, 0.0), t1 = std::min(t1, 1.0);
-    if (!(t1 > t0)) return 0.0;
+    // Nothing to integrate where both |x| >= 4 σ_o (p_i = 0) and |y| >= 4 σ_o (p_j = 0).
+    auto inside = [&](double lim, double p0, double dp, double& t0, double& t1) {
+        if (dp == 0.0) {
+            t0 = 0.0, t1 = std::abs(p0) < lim ? 1.0 : 0.0;
+            return;
+        }
+        t0 = (-lim - p0) / dp, t1 = (lim - p0) / dp;
+        if (t0 > t1) std::swap(t0, t1);
+        t0 = std::max(t0, 0.0), t1 = std::min(t1, 1.0);
+    };
+    double tx0, tx1, ty0, ty1;
+    inside(kLim, a.x, dx, tx0, tx1);
+    inside(kLim, a.y, dy, ty0, ty1);
+    const bool useX = dx != 0.0 && tx1 > tx0, useY = dy != 0.0 && ty1 > ty0;
+    if (!useX && !useY) return DVec3(0.0);
+    const double t0 = useX && useY ? std::min(tx0, ty0) : (useX ? tx0 : ty0);
+    const double t1 = useX && useY ? std::max(tx1, ty1) : (useX ? tx1 : ty1);
     double t[4 * kRes + 16];
     int n = 0;
     gridCrossings(a.x, dx, t, n);
     gridCrossings(a.y, dy, t, n);
-    // Keep the breakpoints inside [t0, t1], then add the ends.
     int kept = 0;
     for (int s = 0; s < n; ++s)
         if (t[s] > t0 && t[s] < t1) t[kept++] = t[s];
@@ -57,19 +75,26 @@ double edgeMass(const Dictionary& dict, int k, int i, int j, DVec2 a, DVec2 b) {
     t[kept++] = t1;
     std::sort(t, t + kept);
     const float* rowI = dict.row(k, i);
+    const float* rowJ = dict.row(k, j);
+    // Integrands at parameter tv: (p_i F_j, x p_i F_j, F_i y p_j); the pieces of one edge share their end values.
     auto phi = [&](double tv) {
         const double x = a.x + tv * dx, y = a.y + tv * dy;
-        return marginalAt(rowI, x) * double(dict.marginalCdf(k, j, float(y)));
+        DVec3 v(0.0);
+        if (useX && std::abs(x) <= kLim) {
+            const double f = marginalAt(rowI, x) * double(dict.marginalCdf(k, j, float(y)));
+            v.x = f, v.y = x * f;
+        }
+        if (useY && std::abs(y) <= kLim) v.z = double(dict.marginalCdf(k, i, float(x))) * y * marginalAt(rowJ, y);
+        return v;
     };
-    // Simpson's rule on each piece between breakpoints: exact, the integrand is a cubic there.
-    double sum = 0.0, fa = phi(t[0]);
+    DVec3 sum(0.0), fa = phi(t[0]);
     for (int s = 0; s + 1 < kept; ++s) {
         if (!(t[s + 1] > t[s])) continue;
-        const double fb = phi(t[s + 1]);
+        const DVec3 fb = phi(t[s + 1]);
         sum += (t[s + 1] - t[s]) * (fa + 4.0 * phi(0.5 * (t[s] + t[s + 1])) + fb);
         fa = fb;
     }
-    return -dx * sum / 6.0;
+    return DVec3(-dx * sum.x, -dx * sum.y, dy * sum.z) / 6.0;
 }
 
 // The smooth factor of (A1) without F: G (wo·h) / (h_z wo.z) at half slope hs; h is returned for F.
@@ -86,44 +111,94 @@ double smoothFactor(const Vec3& wo, DVec2 hs, Vec3& h) {
 
 }  // namespace
 
-double cellPolygonMass(const Dictionary& dict, int k, int i, int j, const DVec2* q, int n) {
-    double sum = 0.0;
-    for (int e = 0; e < n; ++e) sum += edgeMass(dict, k, i, j, q[e], q[(e + 1) % n]);
+DVec3 cellPolygonMoments(const Dictionary& dict, int k, int i, int j, const DVec2* q, int n) {
+    DVec3 sum(0.0);
+    for (int e = 0; e < n; ++e) sum += edgeMoments(dict, k, i, j, q[e], q[(e + 1) % n]);
     return sum;
 }
 
-double gaussianPolygonMass(const DVec2* q, int n) {
-    // (A2) with p = N(0, σ_o²) and F(y) = erf(y / (σ_o √2)) / 2, on each edge's part with |x| < 8 σ_o (beyond it p is
-    // below 1e-13 of its peak), Simpson on steps of at most σ_o / 8 (relative error ~1e-6).
-    const double so = kSigmaO, xmax = 8.0 * so, h = so / 8.0;
+double cellPolygonMass(const Dictionary& dict, int k, int i, int j, const DVec2* q, int n) {
+    return cellPolygonMoments(dict, k, i, j, q, n).x;
+}
+
+DVec3 gaussianPolygonMoments(const DVec2* q, int n) {
+    // The moments of edgeMoments with p = N(0, σ_o²) and F(y) = erf(y / (σ_o √2)) / 2, on each edge's part with
+    // |x| < 8 σ_o or |y| < 8 σ_o (beyond it p is below 1e-13 of its peak), Simpson on steps of at most σ_o / 8
+    // (relative error ~1e-6).
+    const double so = kSigmaO, lim = 8.0 * so, h = so / 8.0;
     const double norm = 1.0 / (so * std::sqrt(2.0 * kPiD)), ir = 1.0 / (so * std::sqrt(2.0));
-    double total = 0.0;
+    auto pdf = [&](double x) { return norm * std::exp(-0.5 * x * x / (so * so)); };
+    auto cdf = [&](double x) { return 0.5 * std::erf(x * ir); };
+    DVec3 total(0.0);
     for (int e = 0; e < n; ++e) {
         const DVec2 a = q[e], b = q[(e + 1) % n];
-        const double dx = b.x - a.x, dy = b.y - a.y;
-        if (dx == 0.0) continue;
-        double t0 = (-xmax - a.x) / dx, t1 = (xmax - a.x) / dx;
-        if (t0 > t1) std::swap(t0, t1);
-        t0 = std::max(t0, 0.0), t1 = std::min(t1, 1.0);
-        if (!(t1 > t0)) continue;
-        const int steps = std::max(1, int(std::ceil((t1 - t0) * std::abs(dx) / h)));
+        const DVec2 d = b - a;
+        const double len = std::max(std::abs(d.x), std::abs(d.y));
+        if (len == 0.0) continue;
+        const int steps = std::clamp(int(std::ceil(len / h)), 1, 4096);
         auto phi = [&](double tv) {
-            const double x = a.x + tv * dx, y = a.y + tv * dy;
-            return norm * std::exp(-0.5 * x * x / (so * so)) * 0.5 * std::erf(y * ir);
+            const double x = a.x + tv * d.x, y = a.y + tv * d.y;
+            DVec3 v(0.0);
+            if (std::abs(x) < lim) {
+                const double f = pdf(x) * cdf(y);
+                v.x = f, v.y = x * f;
+            }
+            if (std::abs(y) < lim) v.z = cdf(x) * y * pdf(y);
+            return v;
         };
-        const double dt = (t1 - t0) / steps;
-        double sum = 0.0, fa = phi(t0);
+        const double dt = 1.0 / steps;
+        DVec3 sum(0.0), fa = phi(0.0);
         for (int s = 0; s < steps; ++s) {
-            const double ta = t0 + s * dt, fb = phi(ta + dt);
+            const double ta = s * dt;
+            const DVec3 fb = phi(ta + dt);
             sum += fa + 4.0 * phi(ta + 0.5 * dt) + fb;
             fa = fb;
         }
-        total += -dx * sum * dt / 6.0;
+        total += DVec3(-d.x * sum.x, -d.x * sum.y, d.y * sum.z) * (dt / 6.0);
     }
     return total;
 }
 
-int halfSlopeRegion(const Vec3& wo, const Vec3* vertices, int count, const GlintAreaSettings& settings, DVec2* out) {
+double gaussianPolygonMass(const DVec2* q, int n) { return gaussianPolygonMoments(q, n).x; }
+
+namespace {
+
+// Adaptive chords of one spherical edge a -> b (unit vectors) mapped to half slopes: the arc's midpoint is split
+// off while its image lies farther than the tolerance from the chord, measured in M^-1 space (where the cell
+// distributions live, lobes σ_l = 0.02 wide). Appends the edge's start and its inner vertices, in order.
+struct RegionBuilder {
+    DVec3 o;
+    const GlintShape* shape;
+    double tolerance;
+    int maxDepth;
+    DVec2* out;
+    int n = 0;
+    DVec2 map(const DVec3& wi) const {
+        const DVec3 h = glm::normalize(o + wi);  // h.z > 0: wo.z > 0 and wi.z >= 0
+        return DVec2(-h.x / h.z, -h.y / h.z);
+    }
+    DVec2 toM(DVec2 hs) const { return DVec2(shape->mi00 * hs.x + shape->mi01 * hs.y, shape->mi11 * hs.y); }
+    void edge(const DVec3& a, DVec2 ha, const DVec3& b, DVec2 hb, int depth) {
+        // Points of the great-circle arc (the edge of the spherical polygon) by normalised linear interpolation.
+        const DVec3 m = glm::normalize(a + b);
+        const DVec2 hm = map(m);
+        const DVec2 pa = toM(ha), pb = toM(hb), pm = toM(hm), d = pb - pa;
+        const double len2 = glm::dot(d, d);
+        const double tt = len2 > 0.0 ? std::clamp(glm::dot(pm - pa, d) / len2, 0.0, 1.0) : 0.0;
+        const DVec2 off = pm - (pa + tt * d);
+        if (depth < maxDepth && glm::dot(off, off) > tolerance * tolerance) {
+            edge(a, ha, m, hm, depth + 1);
+            edge(m, hm, b, hb, depth + 1);
+            return;
+        }
+        out[n++] = ha;
+    }
+};
+
+}  // namespace
+
+int halfSlopeRegion(const Vec3& wo, const Vec3* vertices, int count, const GlintShape& shape,
+                    const GlintAreaSettings& settings, DVec2* out) {
     if (count < 3 || count > 4 || wo.z <= 0.f) return 0;
     DVec3 v[4], c[5];
     for (int i = 0; i < count; ++i) v[i] = DVec3(vertices[i]);
@@ -134,20 +209,21 @@ int halfSlopeRegion(const Vec3& wo, const Vec3* vertices, int count, const Glint
     const int m = ltc::clipToUpperHemisphere(v, count, c);
     if (m < 3) return 0;
     for (int i = 0; i < m; ++i) c[i] = glm::normalize(c[i]);
-    const DVec3 o = glm::normalize(DVec3(wo));
-    const int maxChords = std::clamp(settings.maxChordsPerEdge, 1, 24);
-    int n = 0;
+    RegionBuilder rb{glm::normalize(DVec3(wo)), &shape, std::max(double(settings.chordTolerance), 1e-7),
+                     std::clamp(settings.maxDepth, 1, kMaxChordDepth), out};  // <= 5 edges x 2^depth vertices
+    // Each edge at least 4 chords deep is not needed: the midpoint test starts on the whole edge, but an S-shaped
+    // image could hide behind a straight midpoint, so the first split is unconditional for long edges (> 0.1 rad).
     for (int e = 0; e < m; ++e) {
         const DVec3 a = c[e], b = c[(e + 1) % m];
-        const double angle = std::acos(std::clamp(glm::dot(a, b), -1.0, 1.0));
-        const int chords = std::clamp(int(std::ceil(angle / std::max(double(settings.maxChordAngle), 1e-4))), 1, maxChords);
-        for (int s = 0; s < chords; ++s) {
-            // Points of the great-circle arc (the edge of the spherical polygon) by normalised linear interpolation.
-            const DVec3 wi = glm::normalize(a + (b - a) * (double(s) / chords));
-            const DVec3 h = glm::normalize(o + wi);  // h.z > 0: wo.z > 0 and wi.z >= 0
-            out[n++] = DVec2(-h.x / h.z, -h.y / h.z);
+        if (glm::dot(a, b) < std::cos(0.1)) {
+            const DVec3 mid = glm::normalize(a + b);
+            rb.edge(a, rb.map(a), mid, rb.map(mid), 1);
+            rb.edge(mid, rb.map(mid), b, rb.map(b), 1);
+        } else {
+            rb.edge(a, rb.map(a), b, rb.map(b), 0);
         }
     }
+    int n = rb.n;
     // Orientation: the map may mirror the plane (h~ = -h_xy/h_z); make the region counter-clockwise for (A2).
     double area2 = 0.0;
     for (int i = 0; i < n; ++i) area2 += out[i].x * out[(i + 1) % n].y - out[(i + 1) % n].x * out[i].y;
@@ -155,49 +231,129 @@ int halfSlopeRegion(const Vec3& wo, const Vec3* vertices, int count, const Glint
     return area2 != 0.0 ? n : 0;
 }
 
+namespace {
+
+// The smooth factor of (A1) at direction wi (lobe frame, any length), 0 below the horizon.
+double smoothFactorAt(const Vec3& wo, const Vec3& wi) {
+    const DVec3 w = glm::normalize(DVec3(wi));
+    if (!(w.z > 0.0)) return 0.0;
+    const DVec3 h = glm::normalize(DVec3(wo) + w);
+    Vec3 hf;
+    return smoothFactor(wo, DVec2(-h.x / h.z, -h.y / h.z), hf);
+}
+
+// Splits the light polygon (3 or 4 vertices) into pieces over which the smooth factor is close to linear: a piece
+// whose corner and centre values of g spread by more than 'tolerance' of their maximum is split into four (quads
+// bilinearly, planar for the planar quads of lights; triangles at their edge midpoints), at most maxDepth times.
+// The V-cavity G has a kink (min(1, .)) and falls to 0 at the horizon, where the centroid rule alone erred by up to
+// 13 % (test_glint_area.cpp).
+void splitLight(const Vec3& wo, const Vec3* v, int count, float tolerance, int depth, int maxDepth,
+                std::vector<std::array<Vec3, 4>>& pieces, std::vector<int>& counts) {
+    double gmin = 1e300, gmax = 0.0;
+    Vec3 centre(0.f);
+    for (int i = 0; i < count; ++i) {
+        const double g = smoothFactorAt(wo, v[i]);
+        gmin = std::min(gmin, g), gmax = std::max(gmax, g);
+        centre += v[i] / float(count);
+    }
+    const double gc = smoothFactorAt(wo, centre);
+    gmin = std::min(gmin, gc), gmax = std::max(gmax, gc);
+    if (depth >= maxDepth || !(gmax - gmin > tolerance * gmax)) {
+        std::array<Vec3, 4> piece{};
+        for (int i = 0; i < count; ++i) piece[i] = v[i];
+        pieces.push_back(piece);
+        counts.push_back(count);
+        return;
+    }
+    if (count == 4) {
+        const Vec3 e01 = 0.5f * (v[0] + v[1]), e12 = 0.5f * (v[1] + v[2]), e23 = 0.5f * (v[2] + v[3]),
+                   e30 = 0.5f * (v[3] + v[0]), c = 0.25f * (v[0] + v[1] + v[2] + v[3]);
+        const Vec3 q[4][4] = {{v[0], e01, c, e30}, {e01, v[1], e12, c}, {c, e12, v[2], e23}, {e30, c, e23, v[3]}};
+        for (const auto& sub : q) splitLight(wo, sub, 4, tolerance, depth + 1, maxDepth, pieces, counts);
+    } else {
+        const Vec3 e01 = 0.5f * (v[0] + v[1]), e12 = 0.5f * (v[1] + v[2]), e20 = 0.5f * (v[2] + v[0]);
+        const Vec3 t[4][3] = {{v[0], e01, e20}, {e01, v[1], e12}, {e20, e12, v[2]}, {e01, e12, e20}};
+        for (const auto& sub : t) splitLight(wo, sub, 3, tolerance, depth + 1, maxDepth, pieces, counts);
+    }
+}
+
+// One piece of the light in M^-1 space: its vertices (offset into the shared buffer), and whether no cell rotation
+// can bring it into the support square |m| < 4 σ_o (it lies beyond the square's circumcircle, radius 4 σ_o √2).
+struct Piece {
+    int offset = 0, n = 0;
+    bool missesAll = false;
+};
+
+}  // namespace
+
 bool glintPolygonIntegral(const Dictionary& dict, const GlintParams& p, const GlintShape& shape,
                           const GlintEvalInputs& in, const Vec3& wo, const Vec3* vertices, int count,
                           GlintAreaResult& out, const GlintAreaSettings& settings) {
     out = GlintAreaResult{};
+    if (count < 3 || count > 4 || wo.z <= 0.f) return false;
+    thread_local std::vector<std::array<Vec3, 4>> lightPieces;
+    thread_local std::vector<int> lightCounts;
+    thread_local std::vector<DVec2> mAll, rotated;
+    lightPieces.clear(), lightCounts.clear(), mAll.clear();
+    splitLight(wo, vertices, count, settings.splitTolerance, 0, std::clamp(settings.maxSplitDepth, 0, 3), lightPieces,
+               lightCounts);
+    std::vector<Piece> pieces;  // small: at most 4^maxSplitDepth
+    pieces.reserve(lightPieces.size());
     DVec2 region[kMaxRegionVertices];
-    const int n = halfSlopeRegion(wo, vertices, count, settings, region);
-    if (n < 3) return false;
-    // Area centroid of R, where the smooth factor of (A1) is taken.
-    double A = 0.0, cx = 0.0, cy = 0.0;
-    for (int e = 0; e < n; ++e) {
-        const DVec2 a = region[e], b = region[(e + 1) % n];
-        const double cr = a.x * b.y - b.x * a.y;
-        A += cr, cx += (a.x + b.x) * cr, cy += (a.y + b.y) * cr;
-    }
-    DVec2 centroid = A != 0.0 ? DVec2(cx, cy) / (3.0 * A) : region[0];
-    const double g = smoothFactor(wo, centroid, out.hCentroid);
-    if (!(g > 0.0)) return true;
-
-    // R in M^-1 space (m before the cell's rotation), and its distance range to the origin: a cell's rotated polygon
-    // misses the support square |m| < 4 σ_o when R lies beyond its circumcircle of radius 4 σ_o √2.
-    DVec2 mr[kMaxRegionVertices];
     const double mi00 = shape.mi00, mi01 = shape.mi01, mi11 = shape.mi11;
-    for (int e = 0; e < n; ++e) mr[e] = DVec2(mi00 * region[e].x + mi01 * region[e].y, mi11 * region[e].y);
-    bool containsOrigin = false;  // crossing-number test (R may be slightly non-convex: its edges are chords of curves)
-    double minDist2 = 1e300;
-    for (int e = 0; e < n; ++e) {
-        const DVec2 a = mr[e], b = mr[(e + 1) % n], d = b - a;
-        if ((a.y > 0.0) != (b.y > 0.0) && a.x - a.y * d.x / d.y > 0.0) containsOrigin = !containsOrigin;
-        const double len2 = glm::dot(d, d);
-        const double tt = len2 > 0.0 ? std::clamp(-glm::dot(a, d) / len2, 0.0, 1.0) : 0.0;
-        const DVec2 c = a + tt * d;
-        minDist2 = std::min(minDist2, glm::dot(c, c));
+    DVec2 fallbackCentroid(0.0);
+    for (size_t k = 0; k < lightPieces.size(); ++k) {
+        const int n = halfSlopeRegion(wo, lightPieces[k].data(), lightCounts[k], shape, settings, region);
+        if (n < 3) continue;
+        Piece pc;
+        pc.offset = int(mAll.size()), pc.n = n;
+        bool containsOrigin = false;  // crossing-number test (R may be slightly non-convex: chords of curves)
+        double minDist2 = 1e300;
+        for (int e = 0; e < n; ++e) mAll.push_back(DVec2(mi00 * region[e].x + mi01 * region[e].y, mi11 * region[e].y));
+        const DVec2* mr = mAll.data() + pc.offset;
+        for (int e = 0; e < n; ++e) {
+            const DVec2 a = mr[e], b = mr[(e + 1) % n], d = b - a;
+            if ((a.y > 0.0) != (b.y > 0.0) && a.x - a.y * d.x / d.y > 0.0) containsOrigin = !containsOrigin;
+            const double len2 = glm::dot(d, d);
+            const double tt = len2 > 0.0 ? std::clamp(-glm::dot(a, d) / len2, 0.0, 1.0) : 0.0;
+            const DVec2 c = a + tt * d;
+            minDist2 = std::min(minDist2, glm::dot(c, c));
+        }
+        pc.missesAll = !containsOrigin && minDist2 >= 2.0 * kLim * kLim;
+        fallbackCentroid = region[0];
+        pieces.push_back(pc);
     }
-    const bool missesAll = !containsOrigin && minDist2 >= 2.0 * kLim * kLim;
+    if (pieces.empty()) return false;
+    out.hCentroid = Vec3(glm::normalize(DVec3(-fallbackCentroid.x, -fallbackCentroid.y, 1.0)));
 
-    double convergedMass = -1.0;  // the Beckmann mass, computed on first use (shared by all converged cells)
-    auto beckmannMass = [&]() {
-        if (convergedMass < 0.0) convergedMass = std::max(gaussianPolygonMass(mr, n), 0.0);
-        return convergedMass;
+    // The smooth factor g of (A1) is evaluated at each cell's mass centroid inside each piece (its first moments,
+    // mapped back from m-space by M = (M^-1)^-1): exact for g linear over the cell's mass in the piece. Accumulated:
+    // Σ mass g and Σ mass h~ (the mass-weighted centroid, where the caller evaluates F).
+    const double m00 = 1.0 / mi00, m01 = -mi01 / (mi00 * mi11), m11 = 1.0 / mi11;
+    // (mass g, mass h~x, mass h~y, mass) of one cell from its moments in its rotated m-space (rotation θ).
+    auto weighted = [&](const DVec3& moments, double c, double sn) {
+        if (!(moments.x > 0.0)) return DVec4(0.0);
+        const DVec2 mc(moments.y / moments.x, moments.z / moments.x);  // centroid in the cell's rotated m-space
+        const DVec2 mu(c * mc.x - sn * mc.y, sn * mc.x + c * mc.y);    // Rot(θ): back to M^-1 space
+        const DVec2 hs(m00 * mu.x + m01 * mu.y, m11 * mu.y);
+        Vec3 h;
+        return moments.x * DVec4(smoothFactor(wo, hs, h), hs.x, hs.y, 1.0);
+    };
+    bool convergedDone = false;  // the Beckmann cell, computed on first use (shared by all converged cells)
+    DVec4 converged(0.0);
+    auto beckmann = [&]() {
+        if (!convergedDone)  // isotropic: the same for any θ
+            for (const Piece& pc : pieces) converged += weighted(gaussianPolygonMoments(mAll.data() + pc.offset, pc.n), 1.0, 0.0);
+        convergedDone = true;
+        return converged;
+    };
+    auto finish = [&](const DVec4& acc) {
+        out.integral = float(std::max(acc.x, 0.0));
+        if (acc.w > 0.0) out.hCentroid = Vec3(glm::normalize(DVec3(-acc.y / acc.w, -acc.z / acc.w, 1.0)));
     };
     const Footprint fp = footprint(in.duvdx, in.duvdy, p.maxAniso);
-    if (!fp.valid) {
-        out.integral = float(g * beckmannMass());
+    if (!fp.valid) {  // no footprint: the point evaluation reads P_B
+        finish(beckmann());
         return true;
     }
     SdfQuery q;  // the point evaluation's per-query constants that drawCell reads (no half vector: none is fixed here)
@@ -205,40 +361,44 @@ bool glintPolygonIntegral(const Dictionary& dict, const GlintParams& p, const Gl
     q.jitter = p.jitter;
     q.lcBase = p.logDensity / 1.38629436f - float(kLevels - 1);
 
-    DVec2 rotated[kMaxRegionVertices];
-    // The EWA average of the cells' masses at level l: the point evaluation's levelSdf with each SDF value replaced
-    // by its integral over R (the weights do not depend on h~, so the average commutes with the integral).
-    auto levelMass = [&](int l) {
-        double sumW = 0.0, sumWM = 0.0;
+    rotated.resize(kMaxRegionVertices);
+    // The EWA average of the cells' integrals at level l: the point evaluation's levelSdf with each SDF value
+    // replaced by its integral over R (the weights do not depend on h~, so the average commutes with the integral).
+    auto level = [&](int l) {
+        double sumW = 0.0;
+        DVec4 acc(0.0);
         out.cells += forEachCell(l, in.uv, fp.a1, fp.a2, [&](int s, int t, float W) {
             sumW += W;
             const CellDraw d = drawCell(q, l, s, t);
             if (d.empty) return;
             if (d.converged) {
-                sumWM += W * beckmannMass();
+                acc += double(W) * beckmann();
                 return;
             }
-            if (missesAll) return;
             // Rot(-θ): m = (c x + s y, -s x + c y), as cellSdf.
             const double c = std::cos(double(d.theta)), sn = std::sin(double(d.theta));
-            double x0 = 1e300, x1 = -1e300, y0 = 1e300, y1 = -1e300;
-            for (int e = 0; e < n; ++e) {
-                rotated[e] = DVec2(c * mr[e].x + sn * mr[e].y, -sn * mr[e].x + c * mr[e].y);
-                x0 = std::min(x0, rotated[e].x), x1 = std::max(x1, rotated[e].x);
-                y0 = std::min(y0, rotated[e].y), y1 = std::max(y1, rotated[e].y);
+            for (const Piece& pc : pieces) {
+                if (pc.missesAll) continue;
+                const DVec2* mr = mAll.data() + pc.offset;
+                double x0 = 1e300, x1 = -1e300, y0 = 1e300, y1 = -1e300;
+                for (int e = 0; e < pc.n; ++e) {
+                    rotated[e] = DVec2(c * mr[e].x + sn * mr[e].y, -sn * mr[e].x + c * mr[e].y);
+                    x0 = std::min(x0, rotated[e].x), x1 = std::max(x1, rotated[e].x);
+                    y0 = std::min(y0, rotated[e].y), y1 = std::max(y1, rotated[e].y);
+                }
+                if (x0 >= kLim || x1 <= -kLim || y0 >= kLim || y1 <= -kLim) continue;  // outside the support square
+                acc += double(W) * weighted(cellPolygonMoments(dict, d.k, d.i, d.j, rotated.data(), pc.n), c, sn);
             }
-            if (x0 >= kLim || x1 <= -kLim || y0 >= kLim || y1 <= -kLim) return;  // outside the support square
-            sumWM += W * cellPolygonMass(dict, d.k, d.i, d.j, rotated, n);
         });
-        return sumW > 0.0 ? sumWM / sumW : 0.0;
+        return sumW > 0.0 ? acc / sumW : DVec4(0.0);
     };
     // The LOD blend of patchSdf (C20 Eq. 3).
     const float i0f = std::floor(fp.lodP);
     const int l0 = int(i0f);
     const double w = fp.lodP - i0f;
-    double mass = levelMass(l0);
-    if (w > 0.0) mass = (1.0 - w) * mass + w * levelMass(std::min(l0 + 1, kLevels - 1));
-    out.integral = float(g * std::max(mass, 0.0));
+    DVec4 r = level(l0);
+    if (w > 0.0) r = (1.0 - w) * r + w * level(std::min(l0 + 1, kLevels - 1));
+    finish(r);
     return true;
 }
 

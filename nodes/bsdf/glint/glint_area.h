@@ -6,16 +6,16 @@
 //   dω_h = h_z^3 dh~       (slope space: the Jacobian of h~ -> h = (-h~, 1)/|(-h~, 1)|)
 // so with f cos = F G D / (4 wo.z) and D = P(h~) / h_z^4 (C20 Eq. 14):
 //   ∫_light f cos dω_i = ∫_R F G P(h~) (wo·h) / (h_z wo.z) dh~                                           (A1)
-// over R, the light's region of half slopes. The smooth factor g = F G (wo·h)/(h_z wo.z) is taken at R's area centroid
-// (measured error in tests/unit/test_glint_area.cpp); P is the LOD blend of EWA averages of cell SDFs (C20 Eq. 3), and
+// over R, the light's region of half slopes. The smooth factor G (wo·h)/(h_z wo.z) is taken at each cell's mass
+// centroid in R (first moments by the same edge integrals), F at the mass-weighted centroid of all cells; P is the LOD blend of EWA averages of cell SDFs (C20 Eq. 3), and
 // a cell's SDF det(M^-1) p_i(|m_x|) p_j(|m_y|), m = Rot(-θ) M^-1 h~, integrates over R to the mass of the separable
 // p_i(|x|) p_j(|y|) over the convex-ish polygon Rot(-θ) M^-1 R (det(M^-1) is the Jacobian dm/dh~). By Green's theorem
 //   ∫∫_Q p_i(x) p_j(y) dx dy = -∮_∂Q p_i(x) F_j(y) dx,   F_j(y) = ∫_0^y p_j = Dictionary::marginalCdf      (A2)
 // for any simple counter-clockwise polygon Q. Along an edge y is linear in x, p_i is piecewise linear in x between
 // texel centres and F_j piecewise quadratic in y between texel centres, so between consecutive breakpoints of both
 // grids the integrand is a cubic and Simpson's rule is exact: the cell integral is exact for the polygonal R.
-// The only approximations are the polygonal R (the images of the light's great-circle edges are curves, subdivided
-// into chords) and g at the centroid. Converged cells (k = L) and the no-footprint case integrate the Beckmann SDF,
+// The only approximations are the polygonal R (the images of the light's great-circle edges are curves, split
+// adaptively into chords) and the smooth factor at the centroids. Converged cells (k = L) and the no-footprint case integrate the Beckmann SDF,
 // which in m-space is the isotropic N(0, σ_o² I) whatever the cell's rotation (M M^T = Σ/σ_o², C21 Eq. 18), through
 // the same (A2) with Gaussian p and erf F (Simpson on σ_o/8 steps).
 // GGAA (C21 §4.2) is not applied: the light's extent already filters the half-vector distribution.
@@ -30,10 +30,16 @@ namespace specula::glint {
 using DVec2 = glm::dvec2;
 
 struct GlintAreaSettings {
-    // Each edge of the (clipped) light polygon is split into chords of at most this angle (radians) before mapping to
-    // half slopes: the map bends the great-circle edges. 0.05 rad measured below 0.5 % error (test_glint_area.cpp).
-    float maxChordAngle = 0.05f;
-    int maxChordsPerEdge = 24;
+    // The images of the light's great-circle edges in half-slope space are curves: they are split into chords until
+    // the arc's midpoint lies within this distance of its chord in M^-1 space (the cell distributions' space, whose
+    // lobes are σ_l = 0.02 wide); at most 2^maxDepth chords per edge (maxDepth <= kMaxChordDepth). Error measured in test_glint_area.cpp.
+    float chordTolerance = 3e-4f;
+    int maxDepth = 6;
+    // The light is split into up to 4^maxSplitDepth pieces until the smooth factor G (wo·h)/(h_z wo.z) spreads by at
+    // most splitTolerance (relative) over each piece's corners and centre (the V-cavity G is not smooth: a kink
+    // and a fall to 0 at the horizon).
+    float splitTolerance = 0.1f;
+    int maxSplitDepth = 2;
 };
 
 struct GlintAreaResult {
@@ -45,8 +51,10 @@ struct GlintAreaResult {
 // The half-slope region R of a light polygon (lobe frame, vertices relative to the shading point, CCW from it) for wo:
 // the polygon clipped to wi.z > 0, its edges split into chords, each vertex mapped to h~. Returns the vertex count
 // (0: invisible); 'out' is counter-clockwise in the h~ plane and needs kMaxRegionVertices entries.
-constexpr int kMaxRegionVertices = 5 * 24 + 1;
-int halfSlopeRegion(const Vec3& wo, const Vec3* vertices, int count, const GlintAreaSettings& settings, DVec2* out);
+constexpr int kMaxChordDepth = 6;
+constexpr int kMaxRegionVertices = 5 << kMaxChordDepth;  // the clipped quad's <= 5 edges, 2^depth chords each
+int halfSlopeRegion(const Vec3& wo, const Vec3* vertices, int count, const GlintShape& shape,
+                    const GlintAreaSettings& settings, DVec2* out);
 
 // ∫_light f_glint cos dω_i / F (A1) for one shading point. False when the light is invisible from the lobe's side.
 bool glintPolygonIntegral(const Dictionary& dict, const GlintParams& p, const GlintShape& shape,
@@ -58,6 +66,9 @@ bool glintPolygonIntegral(const Dictionary& dict, const GlintParams& p, const Gl
 double cellPolygonMass(const Dictionary& dict, int k, int i, int j, const DVec2* q, int n);
 // The same for the isotropic Gaussian N(0, σ_o² I): the Beckmann SDF of converged cells, in m-space.
 double gaussianPolygonMass(const DVec2* q, int n);
+// Mass and first moments (∫∫ p, ∫∫ x p, ∫∫ y p) of both, by the same edge integrals.
+DVec3 cellPolygonMoments(const Dictionary& dict, int k, int i, int j, const DVec2* q, int n);
+DVec3 gaussianPolygonMoments(const DVec2* q, int n);
 
 // A direction for the shadow ray of the ratio estimator (Heitz, Hill & McGuire 2018), deterministic from (u, seed):
 // a point of the light with density ∝ cos θ_i (Malley's method, ltc::samplePolygon with the identity LTC). Not ∝ the
