@@ -25,6 +25,10 @@ const char* bindingName(GeomBinding b) {
         case GeomBinding::NdotV: return "NdotV";
         case GeomBinding::DNDX: return "dNdx";
         case GeomBinding::DNDY: return "dNdy";
+        case GeomBinding::PixelDUVDX: return "duv0dx_pixel";
+        case GeomBinding::PixelDUVDY: return "duv0dy_pixel";
+        case GeomBinding::PixelDNDX: return "dNdx_pixel";
+        case GeomBinding::PixelDNDY: return "dNdy_pixel";
     }
     return "";
 }
@@ -33,10 +37,14 @@ TypeDesc bindingType(GeomBinding b) {
     switch (b) {
         case GeomBinding::UV:
         case GeomBinding::DUVDX:
-        case GeomBinding::DUVDY: return TypeDesc::Vec2;
+        case GeomBinding::DUVDY:
+        case GeomBinding::PixelDUVDX:
+        case GeomBinding::PixelDUVDY: return TypeDesc::Vec2;
         case GeomBinding::P:
         case GeomBinding::DNDX:
         case GeomBinding::DNDY:
+        case GeomBinding::PixelDNDX:
+        case GeomBinding::PixelDNDY:
         case GeomBinding::T: return TypeDesc::Vector3;
         case GeomBinding::N:
         case GeomBinding::Ng: return TypeDesc::Normal3;
@@ -61,6 +69,10 @@ const char* bindingGlsl(GeomBinding b) {
         case GeomBinding::NdotV: return "dot(s.normal, q.wo)";
         case GeomBinding::DNDX: return "s.dNdx";
         case GeomBinding::DNDY: return "s.dNdy";
+        case GeomBinding::PixelDUVDX: return "s.duvdx";
+        case GeomBinding::PixelDUVDY: return "s.duvdy";
+        case GeomBinding::PixelDNDX: return "s.dNdx";
+        case GeomBinding::PixelDNDY: return "s.dNdy";
     }
     return "";
 }
@@ -81,6 +93,10 @@ void loadBinding(GeomBinding b, const ShadingPoint& sp, float* d) {
         case GeomBinding::NdotV: d[0] = glm::dot(sp.n, sp.wo); break;
         case GeomBinding::DNDX: v3(sp.dndx); break;
         case GeomBinding::DNDY: v3(sp.dndy); break;
+        case GeomBinding::PixelDUVDX: v2(sp.duvdx / sp.differentialScale.x); break;
+        case GeomBinding::PixelDUVDY: v2(sp.duvdy / sp.differentialScale.y); break;
+        case GeomBinding::PixelDNDX: v3(sp.dndx / sp.differentialScale.x); break;
+        case GeomBinding::PixelDNDY: v3(sp.dndy / sp.differentialScale.y); break;
     }
 }
 

@@ -37,6 +37,12 @@ enum class GeomBinding : uint8_t {
     NdotV,   // float   dot(sp.n, sp.wo)  dot(s.normal, q.wo)
     DNDX,    // vector3 sp.dndx         s.dNdx   (screen derivative of the surface's shading normal)
     DNDY,    // vector3 sp.dndy         s.dNdy
+    // One whole pixel step whatever the spp (the CPU differentials divided by sp.differentialScale; on a GPU the
+    // derivatives are per pixel already): footprints that are a property of the image, e.g. the glint LOD.
+    PixelDUVDX,  // vec2    sp.duvdx / scale.x   s.duvdx
+    PixelDUVDY,  // vec2    sp.duvdy / scale.y   s.duvdy
+    PixelDNDX,   // vector3 sp.dndx / scale.x    s.dNdx
+    PixelDNDY,   // vector3 sp.dndy / scale.y    s.dNdy
 };
 const char* bindingName(GeomBinding b);
 TypeDesc bindingType(GeomBinding b);

@@ -240,6 +240,7 @@ ShadingPoint Accel::shadingPoint(const RayDifferential& ray, const Hit& hit) con
             Vec3 dn = glm::normalize(ray.d);
             sp.dwodx = -(glm::normalize(ray.rxDirection) - dn);
             sp.dwody = -(glm::normalize(ray.ryDirection) - dn);
+            sp.differentialScale = Vec2(ray.differentialScale);
             sp.hasDifferentials = true;
         }
     }

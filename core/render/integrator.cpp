@@ -144,6 +144,7 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
                 dn = nb.sign * (spn.n - sp.n);
                 dwo = nb.sign * (spn.wo - sp.wo);
                 duv = nb.sign * (spn.uv - sp.uv);
+                sp.differentialScale[k] = 1.f;  // a whole pixel step
             }
             // At silhouettes a partner misses the object: that axis keeps its ray differential.
             sp.hasDifferentials = sp.hasDifferentials || (sp.quad[0].valid && sp.quad[1].valid);
@@ -359,6 +360,7 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
         camera_.approximateDpDxy(sp.p, sp.n, diffScale_, sp.dpdx, sp.dpdy);
         surfaceDifferentials(sp);
         sp.dwodx = sp.dwody = Vec3(0.f);
+        sp.differentialScale = Vec2(diffScale_);
         sp.hasDifferentials = true;
     }
     out.beauty = emitted + out.diffuse + out.specular;

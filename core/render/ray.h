@@ -17,9 +17,12 @@ struct RayDifferential : Ray {
     bool hasDifferentials = false;
     Vec3 rxOrigin{0.f}, ryOrigin{0.f};
     Vec3 rxDirection{0.f}, ryDirection{0.f};
+    // The factor the differentials were shrunk by (1 = one pixel step): per-pixel quantities divide by it.
+    float differentialScale = 1.f;
 
     // Shrinks the differentials to the footprint of one of several samples per pixel.
     void scaleDifferentials(float s) {
+        differentialScale *= s;
         rxOrigin = o + (rxOrigin - o) * s;
         ryOrigin = o + (ryOrigin - o) * s;
         rxDirection = d + (rxDirection - d) * s;

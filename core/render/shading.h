@@ -28,6 +28,10 @@ struct ShadingPoint {
     Vec2 duvdx{0.f}, duvdy{0.f};
     Vec3 dndx{0.f}, dndy{0.f};
     Vec3 dwodx{0.f}, dwody{0.f};  // derivative of wo (world)
+    // The factor the x and y differentials above were shrunk by (pbrt's max(1/8, 1/sqrt(spp)) for ray
+    // differentials; 1 for quad differences): a per-pixel quantity, e.g. the glint LOD footprint, which must not change
+    // with spp, is the differential divided by it (pixel bindings, GeomBinding::PixelDUVDX ...).
+    Vec2 differentialScale{1.f, 1.f};
 
     // Render setting "derivatives": "quad" (filtered-ggx.md §5.2): this pixel's partners in its aligned 2×2 quad along
     // screen x ([0]) and y ([1]), shaded at their own pixel centres; the differentials above then hold the fine

@@ -60,11 +60,11 @@ const NodeParams<Params> kParams = NodeParams<Params>()
     .n3("normal", &Params::normal, Vec3(0, 0, 1), "shading normal").bind(GeomBinding::N)
     .v3("tangent", &Params::tangent, Vec3(1, 0, 0), "tangent: direction of sigma_x").bind(GeomBinding::T)
     .v2("uv", &Params::uv, Vec2(0.f), "texture coordinates of the cell grid").range(0.f, 1.f).bind(GeomBinding::UV)
-    .v2("duvdx", &Params::duvdx, Vec2(0.f), "footprint: d(uv)/dx").range(-0.01f, 0.01f).bind(GeomBinding::DUVDX)
-    .v2("duvdy", &Params::duvdy, Vec2(0.f), "footprint: d(uv)/dy").range(-0.01f, 0.01f).bind(GeomBinding::DUVDY)
+    .v2("duvdx", &Params::duvdx, Vec2(0.f), "glint LOD footprint d(uv)/dx: one pixel step at any spp").range(-0.01f, 0.01f).bind(GeomBinding::PixelDUVDX)
+    .v2("duvdy", &Params::duvdy, Vec2(0.f), "glint LOD footprint d(uv)/dy: one pixel step at any spp").range(-0.01f, 0.01f).bind(GeomBinding::PixelDUVDY)
     .f("uv_scale", &Params::uvScale, 1.f, "multiplies uv and its derivatives").range(0.5f, 4.f)
-    .v3("dndx", &Params::dndx, Vec3(0.f), "screen derivative of the normal (connect texture.normal_map dndx)").range(-0.05f, 0.05f).bind(GeomBinding::DNDX)
-    .v3("dndy", &Params::dndy, Vec3(0.f), "screen derivative of the normal along y").range(-0.05f, 0.05f).bind(GeomBinding::DNDY);
+    .v3("dndx", &Params::dndx, Vec3(0.f), "per-pixel derivative of the normal (connect texture.normal_map dndx)").range(-0.05f, 0.05f).bind(GeomBinding::PixelDNDX)
+    .v3("dndy", &Params::dndy, Vec3(0.f), "per-pixel derivative of the normal along y").range(-0.05f, 0.05f).bind(GeomBinding::PixelDNDY);
 OutputList kOutputs;
 const OutPort<ClosureRef> kBsdf = kOutputs.add<ClosureRef>("bsdf", TypeDesc::Closure, "the glinty specular closure");
 
@@ -96,10 +96,11 @@ void cpu(EvalContext& c, const Instr& i) {
     if (sp) {
         ev.diff.dnx = Vec2(glm::dot(f.t, in.dndx), glm::dot(f.b, in.dndx));
         ev.diff.dny = Vec2(glm::dot(f.t, in.dndy), glm::dot(f.b, in.dndy));
-        ev.diff.dwox = f.toLocal(sp->dwodx);
-        ev.diff.dwoy = f.toLocal(sp->dwody);
-        ev.diff.dpx = f.toLocal(sp->dpdx);
-        ev.diff.dpy = f.toLocal(sp->dpdy);
+        // GGAA differentiates over one whole pixel, like the LOD footprint (the ports above bind pixel steps).
+        ev.diff.dwox = f.toLocal(sp->dwodx / sp->differentialScale.x);
+        ev.diff.dwoy = f.toLocal(sp->dwody / sp->differentialScale.y);
+        ev.diff.dpx = f.toLocal(sp->dpdx / sp->differentialScale.x);
+        ev.diff.dpy = f.toLocal(sp->dpdy / sp->differentialScale.y);
         for (int k = 0; k < 2; ++k) {
             const ShadingPoint::QuadNeighbour& q = sp->quad[k];
             if (!q.valid) continue;
@@ -138,6 +139,9 @@ void reg(NodeRegistry& r) {
     s.category = "bsdf";
     s.doc = "Procedural glints (Chermain et al. 2020) with geometric glint anti-aliasing and slope correlation "
             "(Chermain et al. 2021); converges to Cook-Torrance with a correlated Beckmann NDF as density grows. "
+            "The LOD footprint and the GGAA derivatives are one pixel step at any spp (C21's real-time setting): the "
+            "glints are a property of the image, so more samples average the same sparkles instead of revealing "
+            "finer ones. "
             "Quad lights in closed form on the CPU (polygon queries, render.area_lights \"ltc\"): each EWA cell's "
             "slope distribution integrated over the light's half-slope region, without GGAA (glint_area.h). The GLSL "
             "function does not answer polygon queries: it returns partial = true and the host samples the light.";
