@@ -246,9 +246,10 @@ TEST(GlintArea, PolygonIntegralMatchesMonteCarloOfThePointEvaluation) {
         std::printf("%s lights: %d queries, mean |rel err| %.4f, max %.4f, bias %+.4f\n", names[k], counted[k],
                     sumRel[k] / std::max(counted[k], 1), maxRel[k], bias);
         EXPECT_GE(counted[k], 8);
-        EXPECT_LT(std::abs(bias), 0.02) << names[k];
-        EXPECT_LT(sumRel[k] / counted[k], 0.03) << names[k];
-        EXPECT_LT(maxRel[k], 0.08) << names[k];
+        // Measured: bias <= 0.05 %, mean <= 0.09 %, max 0.76 % (medium, a glint on the light's edge).
+        EXPECT_LT(std::abs(bias), 0.01) << names[k];
+        EXPECT_LT(sumRel[k] / counted[k], 0.01) << names[k];
+        EXPECT_LT(maxRel[k], 0.03) << names[k];
     }
 }
 
@@ -271,8 +272,9 @@ TEST(GlintArea, TinyLightTendsToThePointEvaluation) {
     }
     std::printf("tiny lights: %d queries, mean |rel err| %.5f, max %.5f\n", counted, sumRel / counted, maxRel);
     EXPECT_GE(counted, 20);
-    EXPECT_LT(sumRel / counted, 0.01);
-    EXPECT_LT(maxRel, 0.05);
+    // Measured: mean 0.02 %, max 0.39 %.
+    EXPECT_LT(sumRel / counted, 0.005);
+    EXPECT_LT(maxRel, 0.02);
 }
 
 TEST(GlintArea, ConvergedLimitIsTheBeckmannLobeIntegral) {
@@ -299,17 +301,18 @@ TEST(GlintArea, ConvergedLimitIsTheBeckmannLobeIntegral) {
         std::printf("converged, %s lights: %d queries, mean |rel err| %.4f, max %.4f\n", names[k], counted[k],
                     sumRel[k] / std::max(counted[k], 1), maxRel[k]);
         EXPECT_GE(counted[k], 8);
-        EXPECT_LT(sumRel[k] / counted[k], 0.02) << names[k];
-        EXPECT_LT(maxRel[k], 0.06) << names[k];
+        // Measured: mean <= 0.19 %, max 1.2 % (large light across G's kink).
+        EXPECT_LT(sumRel[k] / counted[k], 0.01) << names[k];
+        EXPECT_LT(maxRel[k], 0.03) << names[k];
     }
 }
 
 TEST(GlintArea, ChordSubdivisionErrorIsSmall) {
-    // The curved image of the light's edges in half-slope space: integrals with the default chord tolerance (3e-4 in
-    // M^-1 space) against 3e-5.
+    // The curved image of the light's edges in half-slope space: integrals with the default chord tolerance (1e-4 in
+    // M^-1 space) against 1e-5.
     auto cases = randomCases(24, 3);
     GlintAreaSettings fine;
-    fine.chordTolerance = 3e-5f;
+    fine.chordTolerance = 1e-5f;
     fine.maxDepth = kMaxChordDepth;
     double maxRel = 0;
     for (Case& c : cases) {
@@ -321,8 +324,8 @@ TEST(GlintArea, ChordSubdivisionErrorIsSmall) {
         std::printf("  %-6s %.5g %.5g vertices %d %d\n", c.size, a, b, na, nb);
         if (b > 1e-4) maxRel = std::max(maxRel, std::abs(a / b - 1));
     }
-    std::printf("chord tolerance 3e-4 vs 3e-5: max rel diff %.5f\n", maxRel);
-    EXPECT_LT(maxRel, 0.005);
+    std::printf("chord tolerance 1e-4 vs 1e-5: max rel diff %.5f\n", maxRel);
+    EXPECT_LT(maxRel, 0.005);  // measured 0.24 %
 }
 
 namespace {

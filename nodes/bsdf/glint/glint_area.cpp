@@ -45,6 +45,8 @@ inline void gridCrossings(double x0, double dx, double* t, int& n) {
 //   mass = ∫∫ p_i p_j = -∮ p_i(x) F_j(y) dx,   ∫∫ x p_i p_j = -∮ x p_i(x) F_j(y) dx,   ∫∫ y p_i p_j = ∮ F_i(x) y p_j(y) dy.
 // Between breakpoints of both texel grids the mass integrand is a cubic (Simpson exact); the moments' are quartics
 // (Simpson's error on pieces of at most one texel is ~1e-5 relative): they only place the smooth factor (A1).
+// kMoments = false: the mass alone (the moments' entries stay 0), half the table reads.
+template <bool kMoments>
 DVec3 edgeMoments(const Dictionary& dict, int k, int i, int j, DVec2 a, DVec2 b) {
     const double dx = b.x - a.x, dy = b.y - a.y;
     // Nothing to integrate where both |x| >= 4 σ_o (p_i = 0) and |y| >= 4 σ_o (p_j = 0).
@@ -60,7 +62,7 @@ DVec3 edgeMoments(const Dictionary& dict, int k, int i, int j, DVec2 a, DVec2 b)
     double tx0, tx1, ty0, ty1;
     inside(kLim, a.x, dx, tx0, tx1);
     inside(kLim, a.y, dy, ty0, ty1);
-    const bool useX = dx != 0.0 && tx1 > tx0, useY = dy != 0.0 && ty1 > ty0;
+    const bool useX = dx != 0.0 && tx1 > tx0, useY = kMoments && dy != 0.0 && ty1 > ty0;
     if (!useX && !useY) return DVec3(0.0);
     const double t0 = useX && useY ? std::min(tx0, ty0) : (useX ? tx0 : ty0);
     const double t1 = useX && useY ? std::max(tx1, ty1) : (useX ? tx1 : ty1);
@@ -82,9 +84,10 @@ DVec3 edgeMoments(const Dictionary& dict, int k, int i, int j, DVec2 a, DVec2 b)
         DVec3 v(0.0);
         if (useX && std::abs(x) <= kLim) {
             const double f = marginalAt(rowI, x) * double(dict.marginalCdf(k, j, float(y)));
-            v.x = f, v.y = x * f;
+            v.x = f;
+            if constexpr (kMoments) v.y = x * f;
         }
-        if (useY && std::abs(y) <= kLim) v.z = double(dict.marginalCdf(k, i, float(x))) * y * marginalAt(rowJ, y);
+        if (kMoments && useY && std::abs(y) <= kLim) v.z = double(dict.marginalCdf(k, i, float(x))) * y * marginalAt(rowJ, y);
         return v;
     };
     DVec3 sum(0.0), fa = phi(t[0]);
@@ -113,12 +116,14 @@ double smoothFactor(const Vec3& wo, DVec2 hs, Vec3& h) {
 
 DVec3 cellPolygonMoments(const Dictionary& dict, int k, int i, int j, const DVec2* q, int n) {
     DVec3 sum(0.0);
-    for (int e = 0; e < n; ++e) sum += edgeMoments(dict, k, i, j, q[e], q[(e + 1) % n]);
+    for (int e = 0; e < n; ++e) sum += edgeMoments<true>(dict, k, i, j, q[e], q[(e + 1) % n]);
     return sum;
 }
 
 double cellPolygonMass(const Dictionary& dict, int k, int i, int j, const DVec2* q, int n) {
-    return cellPolygonMoments(dict, k, i, j, q, n).x;
+    double sum = 0.0;
+    for (int e = 0; e < n; ++e) sum += edgeMoments<false>(dict, k, i, j, q[e], q[(e + 1) % n]).x;
+    return sum;
 }
 
 DVec3 gaussianPolygonMoments(const DVec2* q, int n) {
@@ -248,7 +253,7 @@ double smoothFactorAt(const Vec3& wo, const Vec3& wi) {
 // The V-cavity G has a kink (min(1, .)) and falls to 0 at the horizon, where the centroid rule alone erred by up to
 // 13 % (test_glint_area.cpp).
 void splitLight(const Vec3& wo, const Vec3* v, int count, float tolerance, int depth, int maxDepth,
-                std::vector<std::array<Vec3, 4>>& pieces, std::vector<int>& counts) {
+                std::vector<std::array<Vec3, 4>>& pieces, std::vector<int>& counts, std::vector<double>& spreads) {
     double gmin = 1e300, gmax = 0.0;
     Vec3 centre(0.f);
     for (int i = 0; i < count; ++i) {
@@ -263,17 +268,18 @@ void splitLight(const Vec3& wo, const Vec3* v, int count, float tolerance, int d
         for (int i = 0; i < count; ++i) piece[i] = v[i];
         pieces.push_back(piece);
         counts.push_back(count);
+        spreads.push_back(gmax > 0.0 ? (gmax - gmin) / gmax : 0.0);
         return;
     }
     if (count == 4) {
         const Vec3 e01 = 0.5f * (v[0] + v[1]), e12 = 0.5f * (v[1] + v[2]), e23 = 0.5f * (v[2] + v[3]),
                    e30 = 0.5f * (v[3] + v[0]), c = 0.25f * (v[0] + v[1] + v[2] + v[3]);
         const Vec3 q[4][4] = {{v[0], e01, c, e30}, {e01, v[1], e12, c}, {c, e12, v[2], e23}, {e30, c, e23, v[3]}};
-        for (const auto& sub : q) splitLight(wo, sub, 4, tolerance, depth + 1, maxDepth, pieces, counts);
+        for (const auto& sub : q) splitLight(wo, sub, 4, tolerance, depth + 1, maxDepth, pieces, counts, spreads);
     } else {
         const Vec3 e01 = 0.5f * (v[0] + v[1]), e12 = 0.5f * (v[1] + v[2]), e20 = 0.5f * (v[2] + v[0]);
         const Vec3 t[4][3] = {{v[0], e01, e20}, {e01, v[1], e12}, {e20, e12, v[2]}, {e01, e12, e20}};
-        for (const auto& sub : t) splitLight(wo, sub, 3, tolerance, depth + 1, maxDepth, pieces, counts);
+        for (const auto& sub : t) splitLight(wo, sub, 3, tolerance, depth + 1, maxDepth, pieces, counts, spreads);
     }
 }
 
@@ -282,6 +288,10 @@ void splitLight(const Vec3& wo, const Vec3* v, int count, float tolerance, int d
 struct Piece {
     int offset = 0, n = 0;
     bool missesAll = false;
+    // Smooth factor nearly constant over the piece (spread below GlintAreaSettings::constantFactorSpread): the cells'
+    // masses alone, times (g, h~) at the piece's area centroid, instead of each cell's centroid.
+    bool constantFactor = false;
+    DVec4 factor{0.0};  // (g, h~x, h~y, 1) at the area centroid
 };
 
 }  // namespace
@@ -293,10 +303,11 @@ bool glintPolygonIntegral(const Dictionary& dict, const GlintParams& p, const Gl
     if (count < 3 || count > 4 || wo.z <= 0.f) return false;
     thread_local std::vector<std::array<Vec3, 4>> lightPieces;
     thread_local std::vector<int> lightCounts;
+    thread_local std::vector<double> lightSpreads;
     thread_local std::vector<DVec2> mAll, rotated;
-    lightPieces.clear(), lightCounts.clear(), mAll.clear();
+    lightPieces.clear(), lightCounts.clear(), lightSpreads.clear(), mAll.clear();
     splitLight(wo, vertices, count, settings.splitTolerance, 0, std::clamp(settings.maxSplitDepth, 0, 3), lightPieces,
-               lightCounts);
+               lightCounts, lightSpreads);
     std::vector<Piece> pieces;  // small: at most 4^maxSplitDepth
     pieces.reserve(lightPieces.size());
     DVec2 region[kMaxRegionVertices];
@@ -321,6 +332,20 @@ bool glintPolygonIntegral(const Dictionary& dict, const GlintParams& p, const Gl
         }
         pc.missesAll = !containsOrigin && minDist2 >= 2.0 * kLim * kLim;
         fallbackCentroid = region[0];
+        if (lightSpreads[k] < settings.constantFactorSpread) {
+            double A = 0.0, cx = 0.0, cy = 0.0;  // area centroid of the piece's region
+            for (int e = 0; e < n; ++e) {
+                const DVec2 a = region[e], b = region[(e + 1) % n];
+                const double cr = a.x * b.y - b.x * a.y;
+                A += cr, cx += (a.x + b.x) * cr, cy += (a.y + b.y) * cr;
+            }
+            if (A > 0.0) {
+                const DVec2 hs(cx / (3.0 * A), cy / (3.0 * A));
+                Vec3 h;
+                pc.constantFactor = true;
+                pc.factor = DVec4(smoothFactor(wo, hs, h), hs.x, hs.y, 1.0);
+            }
+        }
         pieces.push_back(pc);
     }
     if (pieces.empty()) return false;
@@ -387,7 +412,15 @@ bool glintPolygonIntegral(const Dictionary& dict, const GlintParams& p, const Gl
                     y0 = std::min(y0, rotated[e].y), y1 = std::max(y1, rotated[e].y);
                 }
                 if (x0 >= kLim || x1 <= -kLim || y0 >= kLim || y1 <= -kLim) continue;  // outside the support square
-                acc += double(W) * weighted(cellPolygonMoments(dict, d.k, d.i, d.j, rotated.data(), pc.n), c, sn);
+                // The mass over the piece is at most that over its bounding box, the product of two CDF differences;
+                // sparse marginals (few lobes at low k) leave most boxes empty: skip those (bound below 1e-12).
+                const double boxX = dict.marginalCdf(d.k, d.i, float(x1)) - dict.marginalCdf(d.k, d.i, float(x0));
+                const double boxY = dict.marginalCdf(d.k, d.j, float(y1)) - dict.marginalCdf(d.k, d.j, float(y0));
+                if (!(boxX * boxY > 1e-12)) continue;
+                if (pc.constantFactor)
+                    acc += double(W) * std::max(cellPolygonMass(dict, d.k, d.i, d.j, rotated.data(), pc.n), 0.0) * pc.factor;
+                else
+                    acc += double(W) * weighted(cellPolygonMoments(dict, d.k, d.i, d.j, rotated.data(), pc.n), c, sn);
             }
         });
         return sumW > 0.0 ? acc / sumW : DVec4(0.0);

@@ -33,13 +33,16 @@ struct GlintAreaSettings {
     // The images of the light's great-circle edges in half-slope space are curves: they are split into chords until
     // the arc's midpoint lies within this distance of its chord in M^-1 space (the cell distributions' space, whose
     // lobes are σ_l = 0.02 wide); at most 2^maxDepth chords per edge (maxDepth <= kMaxChordDepth). Error measured in test_glint_area.cpp.
-    float chordTolerance = 3e-4f;
+    float chordTolerance = 1e-4f;
     int maxDepth = 6;
     // The light is split into up to 4^maxSplitDepth pieces until the smooth factor G (wo·h)/(h_z wo.z) spreads by at
     // most splitTolerance (relative) over each piece's corners and centre (the V-cavity G is not smooth: a kink
     // and a fall to 0 at the horizon).
     float splitTolerance = 0.1f;
     int maxSplitDepth = 2;
+    // Pieces where that spread is below this use the factor at their area centroid and the cells' masses alone
+    // (half the table reads of the moments).
+    float constantFactorSpread = 0.01f;
 };
 
 struct GlintAreaResult {
