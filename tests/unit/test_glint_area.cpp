@@ -88,7 +88,8 @@ struct Case {
 
 // Random glint materials, footprints and views, with a light around the mirror direction of a slope drawn from the
 // lobe (so most lights catch glints), small (~0.03 rad), medium (~0.2) or large (~0.8) in angle, tilted, at 1-5 units.
-std::vector<Case> randomCases(int count, uint32_t seed) {
+// ggaa: GGAA on, with per-pixel frame rotations (t.dN, b.dN) of up to 0.1 (curved surfaces), which select MIPs 1-6.
+std::vector<Case> randomCases(int count, uint32_t seed, bool ggaa = false) {
     std::mt19937 rng(seed);
     std::uniform_real_distribution<float> U(0.f, 1.f);
     std::normal_distribution<float> N(0.f, 1.f);
@@ -103,7 +104,11 @@ std::vector<Case> randomCases(int count, uint32_t seed) {
         c.p.sigmaY = 0.06f + 0.3f * U(rng);
         c.p.rho = 0.8f * U(rng) - 0.4f;
         c.p.logDensity = 8.f + 14.f * U(rng);
-        c.p.ggaa = false;
+        c.p.ggaa = ggaa;
+        if (ggaa) {
+            c.in.diff.dnx = Vec2(0.2f * U(rng) - 0.1f, 0.2f * U(rng) - 0.1f);
+            c.in.diff.dny = Vec2(0.2f * U(rng) - 0.1f, 0.2f * U(rng) - 0.1f);
+        }
         const float th = 1.2f * U(rng), ph = 2 * kPi * U(rng);
         c.wo = Vec3(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th));
         // Footprint: |duv| from 2e-4 to 2e-2 (LOD ~3 to ~10), anisotropic up to 4:1.
@@ -188,6 +193,28 @@ TEST(GlintArea, CellMassIsExactOverPolygons) {
         EXPECT_NEAR(mt, bt, 2e-3 * std::max(bt, 1e-2)) << "k " << k;
         EXPECT_NEAR(mq, bq, 2e-3 * std::max(bq, 1e-2)) << "k " << k;
         EXPECT_NEAR(cellPolygonMass(dict, k, 5, 77, big, 4), 1.0, 2e-3) << "a marginal pair has unit mass";
+        // GGAA MIPs: box-filtered, so still unit mass; and a triangle against the brute force of textureGrad1D.
+        for (float g : {0.03f, 0.1f, 0.4f}) {
+            const MipBlend b = textureGradLod(g, 0.5f * g);
+            EXPECT_NEAR(cellPolygonMass(dict, k, 5, 77, big, 4, b, b), 1.0, 2e-3) << "MIP " << b.m0 << " + " << b.f;
+            const double bruteMip = [&] {
+                const int N = 800;
+                double sum = 0;
+                for (int a = 0; a < N; ++a)
+                    for (int c = 0; c < N; ++c) {
+                        const double x = -0.3 + (a + 0.5) * 0.8 / N, y = -0.2 + (c + 0.5) * 0.8 / N;
+                        bool inside = true;
+                        for (int e = 0; e < 3 && inside; ++e)
+                            inside = (tri[(e + 1) % 3].x - tri[e].x) * (y - tri[e].y) -
+                                         (tri[(e + 1) % 3].y - tri[e].y) * (x - tri[e].x) >= 0;
+                        if (inside)
+                            sum += double(textureGrad1D(dict.row(k, 5), float(std::abs(x) / lim), g, 0.5f * g)) *
+                                   textureGrad1D(dict.row(k, 77), float(std::abs(y) / lim), g, 0.5f * g);
+                    }
+                return sum * 0.64 / (double(N) * N);
+            }();
+            EXPECT_NEAR(cellPolygonMass(dict, k, 5, 77, tri, 3, b, b), bruteMip, 3e-3 * std::max(bruteMip, 1e-2));
+        }
     }
     EXPECT_NEAR(gaussianPolygonMass(big, 4), 1.0 - 4 * 0.5 * std::erfc(3.0 / (kSigmaO * std::sqrt(2.0))), 1e-6);
     const double gaussTri = [&] {
@@ -206,11 +233,11 @@ TEST(GlintArea, CellMassIsExactOverPolygons) {
     EXPECT_NEAR(gaussianPolygonMass(tri, 3), gaussTri, 1e-4);
 }
 
-TEST(GlintArea, PolygonIntegralMatchesMonteCarloOfThePointEvaluation) {
-    // integratePolygon's glint integral against 256² stratified samples of the quad's area with the exact point
-    // evaluation (glintFCosScalar). Errors are relative to each query's reference (those with a non-negligible one),
-    // the bias is Σ analytic / Σ reference − 1 per size class.
-    const auto cases = randomCases(36, 7);
+// integratePolygon's glint integral against 256² stratified samples of the quad's area with the exact point
+// evaluation (glintFCosScalar). Errors are relative to each query's reference (those with a non-negligible one), the
+// bias is Σ analytic / Σ reference − 1 per size class.
+void compareWithMonteCarlo(bool ggaa) {
+    const auto cases = randomCases(36, 7, ggaa);
     double sumA[3] = {0, 0, 0}, sumR[3] = {0, 0, 0}, maxRel[3] = {0, 0, 0}, sumRel[3] = {0, 0, 0};
     int counted[3] = {0, 0, 0};
     for (size_t n = 0; n < cases.size(); ++n) {
@@ -231,8 +258,8 @@ TEST(GlintArea, PolygonIntegralMatchesMonteCarloOfThePointEvaluation) {
     const char* names[3] = {"small", "medium", "large"};
     for (int k = 0; k < 3; ++k) {
         const double bias = sumA[k] / sumR[k] - 1.0;
-        std::printf("%s lights: %d queries, mean |rel err| %.4f, max %.4f, bias %+.4f\n", names[k], counted[k],
-                    sumRel[k] / std::max(counted[k], 1), maxRel[k], bias);
+        std::printf("GGAA %d, %s lights: %d queries, mean |rel err| %.4f, max %.4f, bias %+.4f\n", int(ggaa), names[k],
+                    counted[k], sumRel[k] / std::max(counted[k], 1), maxRel[k], bias);
         EXPECT_GE(counted[k], 8);
         // Measured: bias <= 0.05 %, mean <= 0.09 %, max 0.76 % (medium, a glint on the light's edge).
         EXPECT_LT(std::abs(bias), 0.01) << names[k];
@@ -240,6 +267,12 @@ TEST(GlintArea, PolygonIntegralMatchesMonteCarloOfThePointEvaluation) {
         EXPECT_LT(maxRel[k], 0.03) << names[k];
     }
 }
+
+TEST(GlintArea, PolygonIntegralMatchesMonteCarloOfThePointEvaluation) { compareWithMonteCarlo(false); }
+
+// With GGAA the area integral reads the MIPs the point evaluation selects for the light's centre direction; the point
+// evaluation's MIPs follow wi across the light, which is the residual.
+TEST(GlintArea, PolygonIntegralWithGgaaMatchesMonteCarloOfThePointEvaluation) { compareWithMonteCarlo(true); }
 
 TEST(GlintArea, TinyLightTendsToThePointEvaluation) {
     // A light of 1e-3 rad: integral / solid angle -> f cos at the centre direction (the glint lobes are ~0.02 rad

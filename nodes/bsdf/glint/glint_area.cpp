@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <mutex>
 #include <vector>
 
 namespace specula::glint {
@@ -19,14 +20,81 @@ constexpr double kPiD = 3.14159265358979323846;
 constexpr double kLim = 4.0 * kSigmaO;  // support of the cell marginals: |m| < 4 σ_o
 constexpr double kDeltaD = kDelta;      // texel spacing (texel centres at (n + 1/2) δ)
 
-// p_{d,k}(|x|) for |x| <= 4 σ_o as cellSdf reads it (sampleLinear on MIP 0); the caller keeps |x| inside the support.
-inline double marginalAt(const float* row, double x) {
-    return sampleLinear(row, kRes, float(std::min(std::abs(x), kLim) / kLim));
+// Cumulative tables of every MIP of every dictionary row (GGAA reads MIPs 1-6, C21 §4.2), built on first use in the
+// layout of Dictionary::cdfNodes: MIP m of res n = 64 >> m has n + 1 nodes, at its n texel centres and at 4 σ_o.
+// 16 x 192 x 134 floats (1.6 MB).
+constexpr int kCdfRowFloats = kRowFloats + kMips;
+constexpr int cdfMipOffset(int m) { return mipOffset(m) + m; }
+const std::vector<float>& mipCdfTable(const Dictionary& dict) {
+    static std::vector<float> table;
+    static std::once_flag once;
+    std::call_once(once, [&] {
+        table.assign(size_t(kLevels) * kMarginals * kCdfRowFloats, 0.f);
+        for (int k = 0; k < kLevels; ++k)
+            for (int d = 0; d < kMarginals; ++d)
+                for (int m = 0; m < kMips; ++m) {
+                    const float* p = dict.mip(k, d, m);
+                    float* c = table.data() + (size_t(k) * kMarginals + d) * kCdfRowFloats + cdfMipOffset(m);
+                    const int n = mipRes(m);
+                    const double s = kLim / n;
+                    // p is constant on [0, s/2] (mirrored repeat) and on [(n - 1/2) s, 4 σ_o], linear in between.
+                    double acc = p[0] * 0.5 * s;
+                    c[0] = float(acc);
+                    for (int i = 0; i + 1 < n; ++i) c[i + 1] = float(acc += s * 0.5 * (double(p[i]) + p[i + 1]));
+                    c[n] = float(acc + p[n - 1] * 0.5 * s);
+                }
+    });
+    return table;
 }
 
-// Appends to t[] the parameters in (0, 1) where x0 + t dx crosses a breakpoint of the marginal grid: 0, the texel
-// centres ±(n + 1/2) δ and ±4 σ_o.
-inline void gridCrossings(double x0, double dx, double* t, int& n) {
+// One cell marginal as the point evaluation reads it: MIP m0 (or, with GGAA, the blend of MIPs m0 and m0 + 1 of
+// textureGrad1D), its value p(|x|) and its signed cumulative F(x) = ∫_0^x p(|x'|) dx' (as Dictionary::marginalCdf
+// for MIP 0). Both are exact for the GL_LINEAR reconstruction: p piecewise linear, F piecewise quadratic between the
+// texel centres of the MIPs read.
+struct FilteredMarginal {
+    const float* p[2];
+    const float* c[2];
+    int res[2];
+    double spacing[2];
+    float f = 0.f;  // weight of the second MIP
+    int mips = 1;
+    FilteredMarginal(const Dictionary& dict, const std::vector<float>& cdf, int k, int d, MipBlend b) {
+        mips = b.f > 0.f ? 2 : 1;
+        f = b.f;
+        for (int e = 0; e < 2; ++e) {
+            const int m = std::min(b.m0 + e, kMips - 1);
+            p[e] = dict.mip(k, d, m);
+            c[e] = cdf.data() + (size_t(k) * kMarginals + d) * kCdfRowFloats + cdfMipOffset(m);
+            res[e] = mipRes(m);
+            spacing[e] = kLim / res[e];
+        }
+    }
+    static double cdfOne(const float* p, const float* c, int n, double s, double ax) {
+        const double t = ax / s - 0.5;
+        if (t <= 0.0) return p[0] * ax;
+        if (t >= n - 1) return std::min(c[n - 1] + p[n - 1] * (ax - (n - 0.5) * s), double(c[n]));
+        const int i = int(t);
+        const double fr = t - i;
+        return c[i] + s * fr * (p[i] + 0.5 * (double(p[i + 1]) - p[i]) * fr);
+    }
+    // p(|x|) for |x| <= 4 σ_o (the caller keeps |x| inside the support).
+    double value(double x) const {
+        const float u = float(std::min(std::abs(x), kLim) / kLim);
+        const double v0 = sampleLinear(p[0], res[0], u);
+        if (mips == 1) return v0;
+        return (1.0 - f) * v0 + f * double(sampleLinear(p[1], res[1], u));
+    }
+    double cdf(double x) const {
+        const double ax = std::min(std::abs(x), kLim), sign = x < 0.0 ? -1.0 : 1.0;
+        double v = cdfOne(p[0], c[0], res[0], spacing[0], ax);
+        if (mips == 2) v = (1.0 - f) * v + f * cdfOne(p[1], c[1], res[1], spacing[1], ax);
+        return sign * v;
+    }
+};
+
+// Appends to t[] the parameters in (0, 1) where x0 + t dx crosses a breakpoint of the marginal's grids: 0, the texel
+// centres ±(n + 1/2) s of each MIP read and ±4 σ_o.
+inline void gridCrossings(const FilteredMarginal& fm, double x0, double dx, double* t, int& n) {
     if (dx == 0.0) return;
     const double xa = std::max(std::min(x0, x0 + dx), -kLim), xb = std::min(std::max(x0, x0 + dx), kLim);
     if (!(xb > xa)) return;
@@ -34,8 +102,11 @@ inline void gridCrossings(double x0, double dx, double* t, int& n) {
         const double tv = (xv - x0) / dx;
         if (tv > 0.0 && tv < 1.0) t[n++] = tv;
     };
-    const int m0 = int(std::ceil(xa / kDeltaD - 0.5)), m1 = int(std::floor(xb / kDeltaD - 0.5));
-    for (int m = std::max(m0, -kRes); m <= std::min(m1, kRes - 1); ++m) add((m + 0.5) * kDeltaD);
+    for (int e = 0; e < fm.mips; ++e) {
+        const double s = fm.spacing[e];
+        const int m0 = int(std::ceil(xa / s - 0.5)), m1 = int(std::floor(xb / s - 0.5));
+        for (int m = std::max(m0, -fm.res[e]); m <= std::min(m1, fm.res[e] - 1); ++m) add((m + 0.5) * s);
+    }
     if (xa < 0.0 && xb > 0.0) add(0.0);
     add(-kLim);
     add(kLim);
@@ -47,7 +118,7 @@ inline void gridCrossings(double x0, double dx, double* t, int& n) {
 // (Simpson's error on pieces of at most one texel is ~1e-5 relative): they only place the smooth factor (A1).
 // kMoments = false: the mass alone (the moments' entries stay 0), half the table reads.
 template <bool kMoments>
-DVec3 edgeMoments(const Dictionary& dict, int k, int i, int j, DVec2 a, DVec2 b) {
+DVec3 edgeMoments(const FilteredMarginal& X, const FilteredMarginal& Y, DVec2 a, DVec2 b) {
     const double dx = b.x - a.x, dy = b.y - a.y;
     // Nothing to integrate where both |x| >= 4 σ_o (p_i = 0) and |y| >= 4 σ_o (p_j = 0).
     auto inside = [&](double lim, double p0, double dp, double& t0, double& t1) {
@@ -66,28 +137,26 @@ DVec3 edgeMoments(const Dictionary& dict, int k, int i, int j, DVec2 a, DVec2 b)
     if (!useX && !useY) return DVec3(0.0);
     const double t0 = useX && useY ? std::min(tx0, ty0) : (useX ? tx0 : ty0);
     const double t1 = useX && useY ? std::max(tx1, ty1) : (useX ? tx1 : ty1);
-    double t[4 * kRes + 16];
+    double t[4 * (kRes + kRes / 2) + 16];
     int n = 0;
-    gridCrossings(a.x, dx, t, n);
-    gridCrossings(a.y, dy, t, n);
+    gridCrossings(X, a.x, dx, t, n);
+    gridCrossings(Y, a.y, dy, t, n);
     int kept = 0;
     for (int s = 0; s < n; ++s)
         if (t[s] > t0 && t[s] < t1) t[kept++] = t[s];
     t[kept++] = t0;
     t[kept++] = t1;
     std::sort(t, t + kept);
-    const float* rowI = dict.row(k, i);
-    const float* rowJ = dict.row(k, j);
     // Integrands at parameter tv: (p_i F_j, x p_i F_j, F_i y p_j); the pieces of one edge share their end values.
     auto phi = [&](double tv) {
         const double x = a.x + tv * dx, y = a.y + tv * dy;
         DVec3 v(0.0);
         if (useX && std::abs(x) <= kLim) {
-            const double f = marginalAt(rowI, x) * double(dict.marginalCdf(k, j, float(y)));
+            const double f = X.value(x) * Y.cdf(y);
             v.x = f;
             if constexpr (kMoments) v.y = x * f;
         }
-        if (kMoments && useY && std::abs(y) <= kLim) v.z = double(dict.marginalCdf(k, i, float(x))) * y * marginalAt(rowJ, y);
+        if (kMoments && useY && std::abs(y) <= kLim) v.z = X.cdf(x) * y * Y.value(y);
         return v;
     };
     DVec3 sum(0.0), fa = phi(t[0]);
@@ -98,6 +167,13 @@ DVec3 edgeMoments(const Dictionary& dict, int k, int i, int j, DVec2 a, DVec2 b)
         fa = fb;
     }
     return DVec3(-dx * sum.x, -dx * sum.y, dy * sum.z) / 6.0;
+}
+
+template <bool kMoments>
+DVec3 polygonMoments(const FilteredMarginal& X, const FilteredMarginal& Y, const DVec2* q, int n) {
+    DVec3 sum(0.0);
+    for (int e = 0; e < n; ++e) sum += edgeMoments<kMoments>(X, Y, q[e], q[(e + 1) % n]);
+    return sum;
 }
 
 // The smooth factor of (A1) without F: G (wo·h) / (h_z wo.z) at half slope hs; h is returned for F.
@@ -114,16 +190,15 @@ double smoothFactor(const Vec3& wo, DVec2 hs, Vec3& h) {
 
 }  // namespace
 
-DVec3 cellPolygonMoments(const Dictionary& dict, int k, int i, int j, const DVec2* q, int n) {
-    DVec3 sum(0.0);
-    for (int e = 0; e < n; ++e) sum += edgeMoments<true>(dict, k, i, j, q[e], q[(e + 1) % n]);
-    return sum;
+
+DVec3 cellPolygonMoments(const Dictionary& dict, int k, int i, int j, const DVec2* q, int n, MipBlend bx, MipBlend by) {
+    const auto& cdf = mipCdfTable(dict);
+    return polygonMoments<true>(FilteredMarginal(dict, cdf, k, i, bx), FilteredMarginal(dict, cdf, k, j, by), q, n);
 }
 
-double cellPolygonMass(const Dictionary& dict, int k, int i, int j, const DVec2* q, int n) {
-    double sum = 0.0;
-    for (int e = 0; e < n; ++e) sum += edgeMoments<false>(dict, k, i, j, q[e], q[(e + 1) % n]).x;
-    return sum;
+double cellPolygonMass(const Dictionary& dict, int k, int i, int j, const DVec2* q, int n, MipBlend bx, MipBlend by) {
+    const auto& cdf = mipCdfTable(dict);
+    return polygonMoments<false>(FilteredMarginal(dict, cdf, k, i, bx), FilteredMarginal(dict, cdf, k, j, by), q, n).x;
 }
 
 DVec3 gaussianPolygonMoments(const DVec2* q, int n) {
@@ -381,10 +456,22 @@ bool glintPolygonIntegral(const Dictionary& dict, const GlintParams& p, const Gl
         finish(beckmann());
         return true;
     }
-    SdfQuery q;  // the point evaluation's per-query constants that drawCell reads (no half vector: none is fixed here)
-    q.relArea = p.relArea;
-    q.jitter = p.jitter;
-    q.lcBase = p.logDensity / 1.38629436f - float(kLevels - 1);
+    // The point evaluation's per-query constants (drawCell's) and, with GGAA (C21 §4.2), its kernel gradients: taken
+    // for the light's centre direction (the pixel's change of h varies little over a light), they select the MIPs
+    // each cell's marginals are integrated at, as textureGrad1D does for one direction.
+    Vec3 wc(0.f);
+    for (int i = 0; i < count; ++i) wc += glm::normalize(vertices[i]);
+    wc = glm::normalize(Vec3(wc.x, wc.y, std::max(wc.z, 1e-3f * glm::length(wc))));
+    const Vec3 hsum = wo + wc;
+    const float hlen = glm::length(hsum);
+    const Vec3 hc = hsum / hlen;
+    Vec2 ddx(0.f), ddy(0.f);
+    if (p.ggaa) {
+        ddx = ggaaDerivative(in.diff, 0, p.mode, wo, wc, hc, hlen, std::numeric_limits<float>::infinity());
+        ddy = ggaaDerivative(in.diff, 1, p.mode, wo, wc, hc, hlen, std::numeric_limits<float>::infinity());
+    }
+    const SdfQuery q = makeQuery(dict, p, shape, hc, ddx, ddy);
+    const auto& cdfTable = mipCdfTable(dict);
 
     rotated.resize(kMaxRegionVertices);
     // The EWA average of the cells' integrals at level l: the point evaluation's levelSdf with each SDF value
@@ -402,6 +489,13 @@ bool glintPolygonIntegral(const Dictionary& dict, const GlintParams& p, const Gl
             }
             // Rot(-θ): m = (c x + s y, -s x + c y), as cellSdf.
             const double c = std::cos(double(d.theta)), sn = std::sin(double(d.theta));
+            MipBlend bx, by;  // GGAA: the MIPs of cellSdf's textureGrad1D calls (kernel gradients rotated by -θ)
+            if (q.ggaa) {
+                const float cf = std::cos(d.theta), sf = std::sin(d.theta);
+                bx = textureGradLod(cf * q.gx.x + sf * q.gx.y, cf * q.gy.x + sf * q.gy.y);
+                by = textureGradLod(-sf * q.gx.x + cf * q.gx.y, -sf * q.gy.x + cf * q.gy.y);
+            }
+            const FilteredMarginal X(dict, cdfTable, d.k, d.i, bx), Y(dict, cdfTable, d.k, d.j, by);
             for (const Piece& pc : pieces) {
                 if (pc.missesAll) continue;
                 const DVec2* mr = mAll.data() + pc.offset;
@@ -414,13 +508,11 @@ bool glintPolygonIntegral(const Dictionary& dict, const GlintParams& p, const Gl
                 if (x0 >= kLim || x1 <= -kLim || y0 >= kLim || y1 <= -kLim) continue;  // outside the support square
                 // The mass over the piece is at most that over its bounding box, the product of two CDF differences;
                 // sparse marginals (few lobes at low k) leave most boxes empty: skip those (bound below 1e-12).
-                const double boxX = dict.marginalCdf(d.k, d.i, float(x1)) - dict.marginalCdf(d.k, d.i, float(x0));
-                const double boxY = dict.marginalCdf(d.k, d.j, float(y1)) - dict.marginalCdf(d.k, d.j, float(y0));
-                if (!(boxX * boxY > 1e-12)) continue;
+                if (!((X.cdf(x1) - X.cdf(x0)) * (Y.cdf(y1) - Y.cdf(y0)) > 1e-12)) continue;
                 if (pc.constantFactor)
-                    acc += double(W) * std::max(cellPolygonMass(dict, d.k, d.i, d.j, rotated.data(), pc.n), 0.0) * pc.factor;
+                    acc += double(W) * std::max(polygonMoments<false>(X, Y, rotated.data(), pc.n).x, 0.0) * pc.factor;
                 else
-                    acc += double(W) * weighted(cellPolygonMoments(dict, d.k, d.i, d.j, rotated.data(), pc.n), c, sn);
+                    acc += double(W) * weighted(polygonMoments<true>(X, Y, rotated.data(), pc.n), c, sn);
             }
         });
         return sumW > 0.0 ? acc / sumW : DVec4(0.0);

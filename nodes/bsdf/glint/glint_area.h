@@ -65,12 +65,15 @@ bool glintPolygonIntegral(const Dictionary& dict, const GlintParams& p, const Gl
                           GlintAreaResult& out, const GlintAreaSettings& settings = {});
 
 // The mass ∫∫_Q p_i(|x|) p_j(|y|) dx dy of the separable cell distribution of dictionary level k (< kLevels) over a
-// polygon Q in m-space (A2, exact for the polygon). Exposed for the tests.
-double cellPolygonMass(const Dictionary& dict, int k, int i, int j, const DVec2* q, int n);
+// polygon Q in m-space (A2, exact for the polygon), each marginal read at the MIP blend of textureGrad1D (GGAA;
+// default: MIP 0, unfiltered). Exposed for the tests.
+double cellPolygonMass(const Dictionary& dict, int k, int i, int j, const DVec2* q, int n, MipBlend bx = {},
+                       MipBlend by = {});
 // The same for the isotropic Gaussian N(0, σ_o² I): the Beckmann SDF of converged cells, in m-space.
 double gaussianPolygonMass(const DVec2* q, int n);
 // Mass and first moments (∫∫ p, ∫∫ x p, ∫∫ y p) of both, by the same edge integrals.
-DVec3 cellPolygonMoments(const Dictionary& dict, int k, int i, int j, const DVec2* q, int n);
+DVec3 cellPolygonMoments(const Dictionary& dict, int k, int i, int j, const DVec2* q, int n, MipBlend bx = {},
+                         MipBlend by = {});
 DVec3 gaussianPolygonMoments(const DVec2* q, int n);
 
 // A direction for the shadow ray of the ratio estimator (Heitz, Hill & McGuire 2018), deterministic from (u, seed):

@@ -126,17 +126,24 @@ inline float sampleLinear(const float* tex, int n, float u) {
 }
 // textureGrad on one dictionary row (127 floats): isotropic GL LOD mu = log2(R max(|g1|, |g2|)), clamped to
 // [0, log2 R]; mu <= 0: MIP 0 linear; else blend MIPs floor(mu) and floor(mu)+1 by frac(mu).
-inline float textureGrad1D(const float* row, float u, float g1, float g2) {
+struct MipBlend {
+    int m0 = 0;     // first MIP
+    float f = 0.f;  // weight of MIP m0 + 1 (0: MIP m0 alone)
+};
+inline MipBlend textureGradLod(float g1, float g2) {  // shared with the area-light integral (glint_area.cpp)
     const float rho = float(kRes) * std::max(std::abs(g1), std::abs(g2));
-    if (!(rho > 1.f)) return sampleLinear(row, kRes, u);
+    if (!(rho > 1.f)) return {};
     const float mu = std::min(std::log2(rho), float(kMips - 1));
     const float m0f = std::floor(mu);
     const int m0 = int(m0f);
-    const float f = mu - m0f;
-    const float v0 = sampleLinear(row + mipOffset(m0), mipRes(m0), u);
-    if (m0 >= kMips - 1) return v0;
-    const float v1 = sampleLinear(row + mipOffset(m0 + 1), mipRes(m0 + 1), u);
-    return (1.f - f) * v0 + f * v1;
+    return {m0, m0 >= kMips - 1 ? 0.f : mu - m0f};
+}
+inline float textureGrad1D(const float* row, float u, float g1, float g2) {
+    const MipBlend b = textureGradLod(g1, g2);
+    const float v0 = sampleLinear(row + mipOffset(b.m0), mipRes(b.m0), u);
+    if (!(b.f > 0.f)) return v0;
+    const float v1 = sampleLinear(row + mipOffset(b.m0 + 1), mipRes(b.m0 + 1), u);
+    return (1.f - b.f) * v0 + b.f * v1;
 }
 
 // ---- S1/S2: footprint and LOD ---------------------------------------------------------------------------
