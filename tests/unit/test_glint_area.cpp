@@ -408,20 +408,21 @@ RenderComparison compareAt16Spp(bool pixelCentres, bool ggaa, int refSpp) {
 }  // namespace
 
 TEST(GlintAreaRender, AnalyticGlintsAt16SppHaveAThirdOfTheSampledErrorWithoutBias) {
-    // Issue 11 item 2's goal, on the quantity both estimate: the area integral has no GGAA (the light's extent
-    // filters), so the three renders run with GGAA off, and at pixel centres, as the glint validation scenes
-    // (tests/validation/glint): what remains is the light integration (and the shadow rays of the ratio estimator).
-    const RenderComparison c = compareAt16Spp(true, false, 4096);  // measured: ratio 0.077, bias +0.07 %
+    // Issue 11 item 2's goal, at pixel centres as the glint validation scenes (tests/validation/glint), so that what
+    // differs between the methods is the light integration alone (plus the ratio estimator's shadow rays).
+    // Measured: RMSE ratio 0.068, bias -0.02 % (area integral without GGAA: 0.077 / +0.07 % against GGAA-off renders,
+    // but RMSE 0.040 and bias -1.3 % against these GGAA renders: why the integral reads GGAA's MIPs).
+    const RenderComparison c = compareAt16Spp(true, true, 4096);
     EXPECT_LE(c.ratio, 0.3);
     EXPECT_LE(std::abs(c.bias), 0.03);
 }
 
-TEST(GlintAreaRender, DefaultSettingsJitteredWithGgaa) {
-    // The default setting (jittered pixel samples, GGAA on in the sampled renders): the jittered samples' coverage
-    // noise is common to both methods, and GGAA's slope-space blur is not in the area integral, so the ratio is
-    // higher; measured numbers are asserted with a margin, the bias against the GGAA reference within 3 %. A 1024-spp
-    // reference keeps CI time (its noise is 1/8 of sampled's at 16 spp: it raises the ratio by < 1 %).
-    const RenderComparison c = compareAt16Spp(false, true, 1024);  // measured (4096-spp reference): 0.630, -0.01 %
-    EXPECT_LE(c.ratio, 0.8);
+TEST(GlintAreaRender, JitteredPixelSamplesKeepTheirCoverageNoise) {
+    // Jittered pixel samples (the renderer's default): each sample shades another point of the glint pattern, and that
+    // coverage noise is common to both methods (it did not change with 8 shadow rays instead of 2), so the ratio is
+    // higher. Measured 0.50 and bias +0.7 % against a 1024-spp reference (its noise, 1/8 of sampled's at 16 spp, keeps
+    // CI time and raises the ratio by < 1 %); asserted with a margin.
+    const RenderComparison c = compareAt16Spp(false, true, 1024);
+    EXPECT_LE(c.ratio, 0.7);
     EXPECT_LE(std::abs(c.bias), 0.03);
 }

@@ -143,7 +143,7 @@ void reg(NodeRegistry& r) {
             "glints are a property of the image, so more samples average the same sparkles instead of revealing "
             "finer ones. "
             "Quad lights in closed form on the CPU (polygon queries, render.area_lights \"ltc\"): each EWA cell's "
-            "slope distribution integrated over the light's half-slope region, without GGAA (glint_area.h). The GLSL "
+            "slope distribution integrated over the light's half-slope region, at the GGAA MIPs of the light's centre (glint_area.h). The GLSL "
             "function does not answer polygon queries: it returns partial = true and the host samples the light.";
     s.inputs = kParams.ports();
     s.outputs = kOutputs.ports();
