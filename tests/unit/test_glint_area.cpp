@@ -351,6 +351,79 @@ TEST(GlintArea, ChordSubdivisionErrorIsSmall) {
 
 namespace {
 
+// The corners of the part s in [s0, s1] (t in [-1, 1]) of a quad light, counter-clockwise seen from the origin.
+Quad subQuad(const Quad& q, float s0, float s1) {
+    Quad r = q;
+    r.centre = q.centre + 0.5f * (s0 + s1) * q.e1;
+    r.e1 = 0.5f * (s1 - s0) * q.e1;
+    r.v[0] = r.centre - r.e1 - r.e2, r.v[1] = r.centre + r.e1 - r.e2, r.v[2] = r.centre + r.e1 + r.e2;
+    r.v[3] = r.centre - r.e1 + r.e2;
+    Vec3 nrm(0.f);
+    for (int i = 0; i < 4; ++i) nrm += glm::cross(r.v[i], r.v[(i + 1) % 4]);
+    if (glm::dot(nrm, r.centre) < 0.f) std::swap(r.v[1], r.v[3]);
+    return r;
+}
+
+}  // namespace
+
+TEST(GlintArea, ShadowRayDirectionsFollowTheGlintIntegrand) {
+    // The ratio estimator's visibility is exact only for directions ∝ the integrand. Test: the fraction of
+    // samplePolygon's directions hitting the left half of the light against that half's share of the integral
+    // (integratePolygon on the half), over medium and large glinty lights; the cosine-weighted sampler for contrast.
+    const auto cases = randomCases(30, 21);
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> U(0.f, 1.f);
+    double sumCells = 0, sumCos = 0, worstCells = 0, hit = 0, drawn = 0;
+    int counted = 0;
+    for (size_t n = 0; n < cases.size(); ++n) {
+        const Case& c = cases[n];
+        if (n % 3 == 0) continue;  // small lights: both samplers are fine
+        const double total = areaIntegral(c);
+        if (total < 1e-3) continue;
+        Case left = c;
+        left.quad = subQuad(c.quad, -1.f, 0.f);
+        const double share = areaIntegral(left) / total;
+        const GlintShape shape = GlintShape::make(c.p.sigmaX, c.p.sigmaY, c.p.rho);
+        const int N = 1000;
+        areaIntegral(c);  // the sampler reuses the cells of the last integral of the same query
+        int inLeftCells = 0, inLeftCos = 0;
+        for (int k = 0; k < N; ++k) {
+            const Vec2 u(U(rng), U(rng));
+            const uint64_t seed = rng();
+            Vec3 w;
+            auto side = [&](const Vec3& wi) {  // light-plane coordinate s of direction wi (|s| <= 1 on the light)
+                const float den = glm::dot(wi, c.quad.normal);
+                const Vec3 pt = wi * (glm::dot(c.quad.centre, c.quad.normal) / den);
+                return glm::dot(pt - c.quad.centre, c.quad.e1) / glm::dot(c.quad.e1, c.quad.e1);
+            };
+            if (glintSamplePolygonByCells(Dictionary::instance(), c.p, shape, c.in, c.wo, c.quad.v, 4, u, seed, w)) {
+                const float sw = side(w);
+                const float tw = [&] {
+                    const Vec3 pt = w * (glm::dot(c.quad.centre, c.quad.normal) / glm::dot(w, c.quad.normal));
+                    return glm::dot(pt - c.quad.centre, c.quad.e2) / glm::dot(c.quad.e2, c.quad.e2);
+                }();
+                inLeftCells += sw < 0.f;
+                hit += std::abs(sw) <= 1.01f && std::abs(tw) <= 1.01f;
+            }
+            drawn += 1;
+            if (glintSamplePolygon(c.quad.v, 4, u, seed, w)) inLeftCos += side(w) < 0.f;
+        }
+        const double dCells = std::abs(double(inLeftCells) / N - share), dCos = std::abs(double(inLeftCos) / N - share);
+        std::printf("  %-6s case %2zu: left share %.3f, cell sampling %.3f, cosine sampling %.3f\n", c.size, n, share,
+                    double(inLeftCells) / N, double(inLeftCos) / N);
+        sumCells += dCells, sumCos += dCos, worstCells = std::max(worstCells, dCells);
+        ++counted;
+    }
+    std::printf("left-half share error: cell sampling mean %.4f max %.4f; cosine sampling mean %.4f; on the light %.4f\n",
+                sumCells / counted, worstCells, sumCos / counted, hit / drawn);
+    EXPECT_GE(counted, 10);
+    EXPECT_LT(sumCells / counted, 0.03);
+    EXPECT_LT(sumCells, 0.5 * sumCos);
+    EXPECT_GT(hit / drawn, 0.99);
+}
+
+namespace {
+
 // A glint torus under one quad light, nothing else (no environment): the specular AOV is the light's glints.
 // 'crop' rows of the 64x36 frame keep CI time low.
 std::string torusScene(int spp, const char* mode, int seed, bool ggaa) {

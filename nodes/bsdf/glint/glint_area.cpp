@@ -369,22 +369,58 @@ struct Piece {
     DVec4 factor{0.0};  // (g, h~x, h~y, 1) at the area centroid
 };
 
-}  // namespace
+// One cell's share of the integral, recorded for samplePolygon: its draws, the piece (-1: a converged cell, whose
+// Gaussian spans all pieces) and its weight (level weight x EWA weight x mass x smooth factor).
+struct CellRecord {
+    double weight;
+    int piece;
+    CellDraw draw;
+};
 
-bool glintPolygonIntegral(const Dictionary& dict, const GlintParams& p, const GlintShape& shape,
-                          const GlintEvalInputs& in, const Vec3& wo, const Vec3* vertices, int count,
-                          GlintAreaResult& out, const GlintAreaSettings& settings) {
+// Per-thread buffers of one query (the integral's, then read by the sampler right after).
+struct AreaScratch {
+    std::vector<std::array<Vec3, 4>> lightPieces;
+    std::vector<int> lightCounts;
+    std::vector<double> lightSpreads;
+    std::vector<DVec2> mAll, rotated;
+    std::vector<Piece> pieces;
+    std::vector<CellRecord> records;
+    // The query these buffers belong to: the integrator asks samplePolygon right after integratePolygon for the same
+    // shading point and light, so the sampler reuses the recorded cells instead of recomputing the integral.
+    std::array<float, 32> key{};
+    bool valid = false;
+};
+thread_local AreaScratch scratch;
+
+std::array<float, 32> queryKey(const GlintParams& p, const GlintEvalInputs& in, const Vec3& wo, const Vec3* v, int count,
+                               const GlintAreaSettings& settings) {
+    std::array<float, 32> k{};
+    int n = 0;
+    for (float x : {wo.x, wo.y, wo.z, in.uv.x, in.uv.y, in.duvdx.x, in.duvdx.y, in.duvdy.x, in.duvdy.y, p.sigmaX,
+                    p.sigmaY, p.rho, p.logDensity, p.relArea, float(count), settings.chordTolerance})
+        k[n++] = x;
+    for (int i = 0; i < count; ++i) k[n++] = v[i].x, k[n++] = v[i].y, k[n++] = v[i].z;
+    return k;  // GGAA differentials are not in the key: equal for one shading point
+}
+
+bool integrateImpl(const Dictionary& dict, const GlintParams& p, const GlintShape& shape, const GlintEvalInputs& in,
+                   const Vec3& wo, const Vec3* vertices, int count, GlintAreaResult& out,
+                   const GlintAreaSettings& settings, bool record) {
     out = GlintAreaResult{};
     if (count < 3 || count > 4 || wo.z <= 0.f) return false;
-    thread_local std::vector<std::array<Vec3, 4>> lightPieces;
-    thread_local std::vector<int> lightCounts;
-    thread_local std::vector<double> lightSpreads;
-    thread_local std::vector<DVec2> mAll, rotated;
+    auto& lightPieces = scratch.lightPieces;
+    auto& lightCounts = scratch.lightCounts;
+    auto& lightSpreads = scratch.lightSpreads;
+    auto& mAll = scratch.mAll;
+    auto& rotated = scratch.rotated;
+    auto& records = scratch.records;
+    records.clear();
+    scratch.valid = false;
     lightPieces.clear(), lightCounts.clear(), lightSpreads.clear(), mAll.clear();
     splitLight(wo, vertices, count, settings.splitTolerance, 0, std::clamp(settings.maxSplitDepth, 0, 3), lightPieces,
                lightCounts, lightSpreads);
-    std::vector<Piece> pieces;  // small: at most 4^maxSplitDepth
-    pieces.reserve(lightPieces.size());
+    auto& pieces = scratch.pieces;  // small: at most 4^maxSplitDepth
+    pieces.clear();
     DVec2 region[kMaxRegionVertices];
     const double mi00 = shape.mi00, mi01 = shape.mi01, mi11 = shape.mi11;
     DVec2 fallbackCentroid(0.0);
@@ -454,6 +490,8 @@ bool glintPolygonIntegral(const Dictionary& dict, const GlintParams& p, const Gl
     const Footprint fp = footprint(in.duvdx, in.duvdy, p.maxAniso);
     if (!fp.valid) {  // no footprint: the point evaluation reads P_B
         finish(beckmann());
+        if (record) records.push_back({beckmann().x, -1, CellDraw{}});
+        if (record) scratch.key = queryKey(p, in, wo, vertices, count, settings), scratch.valid = true;
         return true;
     }
     // The point evaluation's per-query constants (drawCell's) and, with GGAA (C21 §4.2), its kernel gradients: taken
@@ -476,15 +514,17 @@ bool glintPolygonIntegral(const Dictionary& dict, const GlintParams& p, const Gl
     rotated.resize(kMaxRegionVertices);
     // The EWA average of the cells' integrals at level l: the point evaluation's levelSdf with each SDF value
     // replaced by its integral over R (the weights do not depend on h~, so the average commutes with the integral).
-    auto level = [&](int l) {
+    auto level = [&](int l, double levelWeight) {
         double sumW = 0.0;
         DVec4 acc(0.0);
+        const size_t firstRecord = records.size();
         out.cells += forEachCell(l, in.uv, fp.a1, fp.a2, [&](int s, int t, float W) {
             sumW += W;
             const CellDraw d = drawCell(q, l, s, t);
             if (d.empty) return;
             if (d.converged) {
                 acc += double(W) * beckmann();
+                if (record) records.push_back({double(W) * beckmann().x, -1, d});
                 return;
             }
             // Rot(-θ): m = (c x + s y, -s x + c y), as cellSdf.
@@ -509,26 +549,139 @@ bool glintPolygonIntegral(const Dictionary& dict, const GlintParams& p, const Gl
                 // The mass over the piece is at most that over its bounding box, the product of two CDF differences;
                 // sparse marginals (few lobes at low k) leave most boxes empty: skip those (bound below 1e-12).
                 if (!((X.cdf(x1) - X.cdf(x0)) * (Y.cdf(y1) - Y.cdf(y0)) > 1e-12)) continue;
-                if (pc.constantFactor)
-                    acc += double(W) * std::max(polygonMoments<false>(X, Y, rotated.data(), pc.n).x, 0.0) * pc.factor;
-                else
-                    acc += double(W) * weighted(polygonMoments<true>(X, Y, rotated.data(), pc.n), c, sn);
+                const DVec4 cell =
+                    pc.constantFactor
+                        ? double(W) * std::max(polygonMoments<false>(X, Y, rotated.data(), pc.n).x, 0.0) * pc.factor
+                        : double(W) * weighted(polygonMoments<true>(X, Y, rotated.data(), pc.n), c, sn);
+                acc += cell;
+                if (record && cell.x > 0.0) records.push_back({cell.x, int(&pc - pieces.data()), d});
             }
         });
+        for (size_t r = firstRecord; r < records.size(); ++r) records[r].weight *= sumW > 0.0 ? levelWeight / sumW : 0.0;
         return sumW > 0.0 ? acc / sumW : DVec4(0.0);
     };
     // The LOD blend of patchSdf (C20 Eq. 3).
     const float i0f = std::floor(fp.lodP);
     const int l0 = int(i0f);
     const double w = fp.lodP - i0f;
-    DVec4 r = level(l0);
-    if (w > 0.0) r = (1.0 - w) * r + w * level(std::min(l0 + 1, kLevels - 1));
+    DVec4 r = level(l0, 1.0 - w);
+    if (w > 0.0) r = (1.0 - w) * r + w * level(std::min(l0 + 1, kLevels - 1), w);
     finish(r);
+    if (record) scratch.key = queryKey(p, in, wo, vertices, count, settings), scratch.valid = true;
     return true;
+}
+
+}  // namespace
+
+bool glintPolygonIntegral(const Dictionary& dict, const GlintParams& p, const GlintShape& shape,
+                          const GlintEvalInputs& in, const Vec3& wo, const Vec3* vertices, int count,
+                          GlintAreaResult& out, const GlintAreaSettings& settings) {
+    return integrateImpl(dict, p, shape, in, wo, vertices, count, out, settings, true);
 }
 
 bool glintSamplePolygon(const Vec3* vertices, int count, const Vec2& u, uint64_t seed, Vec3& wi) {
     return ltc::samplePolygon(ltc::Ltc{}, vertices, count, u, seed, wi);
+}
+
+namespace {
+
+inline uint64_t splitMix(uint64_t& state) {
+    uint64_t z = (state += 0x9E3779B97F4A7C15ULL);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+    return z ^ (z >> 31);
+}
+inline double unit(uint64_t bits) { return double(bits >> 11) * 0x1.0p-53; }
+
+bool insidePolygon(const DVec2* q, int n, DVec2 pt) {  // crossing number (R may be slightly non-convex)
+    bool in = false;
+    for (int e = 0; e < n; ++e) {
+        const DVec2 a = q[e], b = q[(e + 1) % n];
+        if ((a.y > pt.y) != (b.y > pt.y) && pt.x < a.x + (pt.y - a.y) * (b.x - a.x) / (b.y - a.y)) in = !in;
+    }
+    return in;
+}
+
+}  // namespace
+
+bool glintSamplePolygonByCells(const Dictionary& dict, const GlintParams& p, const GlintShape& shape,
+                               const GlintEvalInputs& in, const Vec3& wo, const Vec3* vertices, int count,
+                               const Vec2& u, uint64_t seed, Vec3& wi, const GlintAreaSettings& settings) {
+    GlintAreaResult r;
+    const bool cached = scratch.valid && scratch.key == queryKey(p, in, wo, vertices, count, settings);
+    if (!cached && !integrateImpl(dict, p, shape, in, wo, vertices, count, r, settings, true)) return false;
+    const auto& records = scratch.records;
+    const auto& pieces = scratch.pieces;
+    double total = 0.0;
+    for (const CellRecord& c : records) total += c.weight;
+    if (!(total > 0.0) || pieces.empty()) return glintSamplePolygon(vertices, count, u, seed, wi);
+    // The cell, by inversion of the cumulative weights with u.x; u.x is then rescaled to [0, 1) for reuse.
+    double target = double(u.x) * total, acc = 0.0, ux = u.x;
+    size_t pick = records.size() - 1;
+    for (size_t c = 0; c < records.size(); ++c) {
+        if (target < acc + records[c].weight) {
+            pick = c;
+            ux = std::clamp((target - acc) / records[c].weight, 0.0, 1.0 - 1e-12);
+            break;
+        }
+        acc += records[c].weight;
+    }
+    const CellRecord& rec = records[pick];
+    const double m00 = 1.0 / shape.mi00, m01 = -shape.mi01 / (shape.mi00 * shape.mi11), m11 = 1.0 / shape.mi11;
+    uint64_t state = seed ^ 0xA5A5F00DULL;
+    // A point of the cell's distribution restricted to its piece: each coordinate by inversion of its marginal's CDF
+    // over the piece's bounding box (MIP 0; the GGAA MIPs only blur it), kept if inside the piece (rejection).
+    for (int attempt = 0; attempt < 32; ++attempt) {
+        const double a = attempt == 0 ? ux : unit(splitMix(state));
+        const double b = attempt == 0 ? double(u.y) : unit(splitMix(state));
+        int pieceIndex = rec.piece;
+        double c = 1.0, sn = 0.0;
+        if (rec.piece < 0) {  // converged: the Gaussian is isotropic; choose a piece by the next uniform
+            pieceIndex = int(std::min(unit(splitMix(state)) * pieces.size(), double(pieces.size() - 1)));
+        } else {
+            c = std::cos(double(rec.draw.theta)), sn = std::sin(double(rec.draw.theta));
+        }
+        const Piece& pc = pieces[pieceIndex];
+        if (pc.missesAll && rec.piece >= 0) break;
+        const DVec2* mr = scratch.mAll.data() + pc.offset;
+        auto& rot = scratch.rotated;
+        double x0 = 1e300, x1 = -1e300, y0 = 1e300, y1 = -1e300;
+        for (int e = 0; e < pc.n; ++e) {
+            rot[e] = DVec2(c * mr[e].x + sn * mr[e].y, -sn * mr[e].x + c * mr[e].y);
+            x0 = std::min(x0, rot[e].x), x1 = std::max(x1, rot[e].x);
+            y0 = std::min(y0, rot[e].y), y1 = std::max(y1, rot[e].y);
+        }
+        DVec2 m;
+        if (rec.piece < 0) {
+            // N(0, σ_o²) per axis restricted to the box: F(x) = erf(x / (σ_o √2)) / 2, inverted with erfinvF.
+            const double ir = 1.0 / (kSigmaO * std::sqrt(2.0));
+            auto inv = [&](double lo, double hi, double v) {
+                const double fl = 0.5 * std::erf(lo * ir), fh = 0.5 * std::erf(hi * ir);
+                const double t = std::clamp(2.0 * (fl + v * (fh - fl)), -0.9999999, 0.9999999);
+                return double(erfinvF(float(t))) / ir;
+            };
+            m = DVec2(inv(x0, x1, a), inv(y0, y1, b));
+        } else {
+            const CellDraw& d = rec.draw;
+            auto inv = [&](int marginal, double lo, double hi, double v) {
+                lo = std::max(lo, -kLim), hi = std::min(hi, kLim);
+                const double fl = dict.marginalCdf(d.k, marginal, float(lo)), fh = dict.marginalCdf(d.k, marginal, float(hi));
+                const double t = fl + v * (fh - fl);
+                return (t < 0.0 ? -1.0 : 1.0) * double(dict.sampleMarginal(d.k, marginal, float(2.0 * std::abs(t))));
+            };
+            m = DVec2(inv(d.i, x0, x1, a), inv(d.j, y0, y1, b));
+        }
+        if (!insidePolygon(rot.data(), pc.n, m)) continue;
+        const DVec2 mu(c * m.x - sn * m.y, sn * m.x + c * m.y);  // Rot(θ): back to M^-1 space
+        const DVec2 hs(m00 * mu.x + m01 * mu.y, m11 * mu.y);
+        const DVec3 h = glm::normalize(DVec3(-hs.x, -hs.y, 1.0));
+        const DVec3 o(wo);
+        const DVec3 w = 2.0 * glm::dot(o, h) * h - o;
+        if (!(w.z > 0.0)) continue;
+        wi = Vec3(glm::normalize(w));
+        return true;
+    }
+    return glintSamplePolygon(vertices, count, u, seed, wi);  // no try landed inside: the cosine-weighted fallback
 }
 
 // ---- GlintLobe's polygon entries (declared in glint_bsdf.h) ----------------------------------------------------
@@ -543,7 +696,7 @@ bool GlintLobe::integratePolygon(const LobeQuery& q, const Vec3* vertices, int c
 
 bool GlintLobe::samplePolygon(const LobeQuery& q, const Vec3* vertices, int count, const Vec2& u, uint64_t seed,
                               Vec3& wi) const {
-    return q.wo.z > 0.f && glintSamplePolygon(vertices, count, u, seed, wi);
+    return q.wo.z > 0.f && glintSamplePolygonByCells(dict_, p_, shape_, in_, q.wo, vertices, count, u, seed, wi);
 }
 
 }  // namespace specula::glint

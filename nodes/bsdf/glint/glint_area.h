@@ -82,8 +82,15 @@ DVec3 gaussianPolygonMoments(const DVec2* q, int n);
 
 // A direction for the shadow ray of the ratio estimator (Heitz, Hill & McGuire 2018), deterministic from (u, seed):
 // a point of the light with density ∝ cos θ_i (Malley's method, ltc::samplePolygon with the identity LTC). Not ∝ the
-// glint integrand: the ratio's visibility is then a cosine-weighted, not glint-weighted, average over the light, which
-// differs only in penumbrae (measured in the render test).
+// glint integrand (the ratio's visibility would be a cosine-weighted average over the light): the fallback below.
 bool glintSamplePolygon(const Vec3* vertices, int count, const Vec2& u, uint64_t seed, Vec3& wi);
+// What GlintLobe::samplePolygon uses: approximately ∝ the glint integrand. A cell is picked with probability ∝ its
+// share of the integral (level weight x EWA weight x mass x smooth factor; the integral is recomputed, recording the
+// cells), then a point of its slope distribution inside the light's region by inverting its marginals' CDFs over the
+// region's bounding box (MIP 0) with rejection, mapped back to wi = reflect(wo, h). Falls back to glintSamplePolygon
+// when no try lands inside.
+bool glintSamplePolygonByCells(const Dictionary& dict, const GlintParams& p, const GlintShape& shape,
+                               const GlintEvalInputs& in, const Vec3& wo, const Vec3* vertices, int count,
+                               const Vec2& u, uint64_t seed, Vec3& wi, const GlintAreaSettings& settings = {});
 
 }  // namespace specula::glint
