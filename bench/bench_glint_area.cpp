@@ -55,6 +55,22 @@ void BM_GlintQuadIntegral(benchmark::State& state) {
 }
 BENCHMARK(BM_GlintQuadIntegral)->Arg(30)->Arg(200)->Arg(800)->ArgName("angle_mrad");
 
+// One shadow-ray direction after the integral of the same query (the integrator's order): the recorded cells are reused.
+void BM_GlintQuadSampleAfterIntegral(benchmark::State& state) {
+    const Setup s = makeSetup(float(state.range(0)) / 1000.f);
+    const Dictionary& dict = Dictionary::instance();
+    GlintAreaResult r;
+    glintPolygonIntegral(dict, s.p, s.shape, s.in, s.wo, s.quad, 4, r);
+    uint64_t seed = 1;
+    for (auto _ : state) {
+        Vec3 wi;
+        const Vec2 u(float((seed * 0x9E3779B9u) & 0xffff) / 65536.f, float((seed * 0x85EBCA6Bu) & 0xffff) / 65536.f);
+        benchmark::DoNotOptimize(glintSamplePolygonByCells(dict, s.p, s.shape, s.in, s.wo, s.quad, 4, u, seed++, wi));
+        benchmark::DoNotOptimize(wi);
+    }
+}
+BENCHMARK(BM_GlintQuadSampleAfterIntegral)->Arg(30)->Arg(200)->Arg(800)->ArgName("angle_mrad");
+
 void BM_GlintPointEvaluation(benchmark::State& state) {
     const Setup s = makeSetup(0.2f);
     const Dictionary& dict = Dictionary::instance();
