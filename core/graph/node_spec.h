@@ -215,8 +215,8 @@ struct NodeSpec {
 };
 
 // ---- flat instruction list ---------------------------------------------------------------------
-constexpr int kMaxInputs = 24;  // bsdf.glint has 20 inputs
-constexpr int kMaxOutputs = 4;
+constexpr int kMaxInputs = 32;  // bsdf.glint has 25 inputs (20 + the fresnelPorts() group and base_color)
+constexpr int kMaxOutputs = 6;  // geometry.uv has 5 (uv, sample and pixel footprints); usedOutputs holds 8 bits
 constexpr uint16_t kNoRegister = 0xFFFF;
 
 // One compiled node: entry point + register offsets. For string ports in[k] is unused (kNoRegister),

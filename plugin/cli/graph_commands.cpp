@@ -375,6 +375,7 @@ void addGraphCommands(CLI::App& app, int& exitCode) {
     auto* plot = app.add_subcommand("plot", "Plot a material's lobe (f·cos over the projected hemisphere) and its GGX slope-space NDF");
     struct PlotArgs {
         std::string file, material, wo, out, raw, uv = "0.5,0.5", duvdx = "0,0", duvdy = "0,0";
+        float footprint = 0.f;
         int size = 256;
     };
     auto p = std::make_shared<PlotArgs>();
@@ -386,6 +387,11 @@ void addGraphCommands(CLI::App& app, int& exitCode) {
     plot->add_option("--uv", p->uv, "texture coordinates U,V of the shading point (default 0.5,0.5)");
     plot->add_option("--duvdx", p->duvdx, "footprint d(uv)/dx A,B (default 0,0)");
     plot->add_option("--duvdy", p->duvdy, "footprint d(uv)/dy C,D (default 0,0)");
+    // A pixel footprint makes footprint-driven lobes (bsdf.glint's sparkles, filtered GGX) show what one pixel of that
+    // size sees; without one (all derivatives 0) they answer with their converged, analytic lobe.
+    plot->add_option("--footprint", p->footprint,
+                     "isotropic footprint DU: d(uv)/dx = (DU, 0), d(uv)/dy = (0, DU) (overrides --duvdx/--duvdy)")
+        ->check(CLI::PositiveNumber);
     plot->add_option("--raw", p->raw, "also write the float values as an EXR (beauty: f·cos RGB of the lobe panel; 'ndf' layer)");
     plot->callback([=, &exitCode] {
         exitCode = run([&] {
@@ -393,7 +399,9 @@ void addGraphCommands(CLI::App& app, int& exitCode) {
             if (p->size < 16 || p->size > 4096) throw UsageError("--size must be in [16, 4096]");
             Loaded l = readMaterial(p->file, p->material);
             MaterialInstance mi = instantiate(l);
-            ShadingPoint sp = localPoint(parseVec2(p->uv, "--uv"), parseVec2(p->duvdx, "--duvdx"), parseVec2(p->duvdy, "--duvdy"), wo);
+            Vec2 duvdx = parseVec2(p->duvdx, "--duvdx"), duvdy = parseVec2(p->duvdy, "--duvdy");
+            if (p->footprint > 0.f) duvdx = Vec2(p->footprint, 0.f), duvdy = Vec2(0.f, p->footprint);
+            ShadingPoint sp = localPoint(parseVec2(p->uv, "--uv"), duvdx, duvdy, wo);
             ScratchArena arena;
             Closure cl;
             mi.material->shade(sp, arena, cl);
@@ -401,6 +409,8 @@ void addGraphCommands(CLI::App& app, int& exitCode) {
             std::vector<float> lobe(size_t(S) * S, -1.f), ndf(size_t(S) * S, -1.f);
             std::vector<float> lobeRgb(size_t(S) * S * 3, 0.f);
             float lobeMax = 0.f, ndfMax = 0.f;
+            double lobeSum = 0.0;  // for lobe_mean: sparkles show as a large max/mean ratio
+            int lobeCount = 0;
             const GgxLobe* g = findGgx(cl);
             float range = g ? std::clamp(3.f * std::max(g->alphaX(), g->alphaY()), 0.05f, 4.f) : 1.f;
             for (int y = 0; y < S; ++y)
@@ -416,6 +426,8 @@ void addGraphCommands(CLI::App& app, int& exitCode) {
                         std::copy(&fc.x, &fc.x + 3, &lobeRgb[(size_t(y) * S + x) * 3]);
                         lobe[size_t(y) * S + x] = val;
                         lobeMax = std::max(lobeMax, val);
+                        lobeSum += val;
+                        ++lobeCount;
                     }
                     if (g) {  // slope space: P22(x̃, ỹ) = D(m) cos⁴θm with m = normalize(−x̃, −ỹ, 1) (Heitz 2014, Eq. 10)
                         Vec3 m = glm::normalize(Vec3(-u * range, -v * range, 1.f));
@@ -467,7 +479,7 @@ void addGraphCommands(CLI::App& app, int& exitCode) {
                 raw.metadata["specula:plot"] = "beauty: f*cos over the projected hemisphere wi = (x, y, sqrt(1-x^2-y^2)); ndf: GGX P22";
                 writeExr(p->raw, raw, *ColorConfig::load("builtin"));
             }
-            json j = {{"lobe_max", lobeMax}, {"ndf_max", ndfMax}, {"slope_range", g ? range : 0.f}, {"has_ggx", g != nullptr}};
+            json j = {{"lobe_max", lobeMax}, {"lobe_mean", lobeCount ? lobeSum / lobeCount : 0.0}, {"ndf_max", ndfMax}, {"slope_range", g ? range : 0.f}, {"has_ggx", g != nullptr}};
             std::printf("%s\n", j.dump().c_str());
         });
     });

@@ -587,6 +587,26 @@ TEST(GlslLtcModule, MixOfDiffuseAndGgxAnswersPolygonQueries) {
     EXPECT_LE(r.maxErr, 1e-4f);
 }
 
+// closure.coat over a diffuse + GGX mix: the coat lobe answers polygon queries with its GGX LTC, the base's answers are
+// scaled by lerp(1, tint·(1 − E(μo)), weight) as on the CPU (coat.glsl against Closure::integratePolygon).
+TEST(GlslLtcModule, CoatOverMixAnswersPolygonQueries) {
+    std::string why;
+    ASSERT_TRUE(glsltest::glContext(&why)) << why;
+    const json mj = json::parse(R"({"nodes": {
+        "d": {"type": "bsdf.diffuse", "inputs": {"color": [0.7, 0.5, 0.3]}},
+        "g": {"type": "bsdf.ggx", "inputs": {"roughness": 0.45, "fresnel": "conductor"}},
+        "m": {"type": "closure.mix", "inputs": {"a": "@d.bsdf", "b": "@g.bsdf", "t": 0.35}},
+        "c": {"type": "closure.coat", "inputs": {"base": "@m.bsdf", "weight": 0.8, "roughness": 0.2, "ior": 1.6,
+                                                 "tint": [0.9, 0.8, 0.6]}}}, "output": "@c.bsdf"})");
+    std::string failure;
+    ModuleResult r = runModule(mj, &failure);
+    ASSERT_TRUE(failure.empty()) << failure;
+    std::printf("LTC PARITY module coat over diffuse+ggx  max_rel_err %.3g  (non-zero channels %d)\n", r.maxErr, r.nonZero);
+    EXPECT_EQ(r.partial, 0);
+    EXPECT_GT(r.nonZero, kSamples * 2);
+    EXPECT_LE(r.maxErr, 1e-4f);
+}
+
 // A lobe without a closed form (bsdf.glint) makes the whole answer partial; the LTC lobes beside it still answer.
 TEST(GlslLtcModule, LobeWithoutClosedFormFlagsPartial) {
     std::string why;

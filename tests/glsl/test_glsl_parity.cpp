@@ -745,8 +745,8 @@ void main() {
     vec2 uv0 = gl_FragCoord.xy * vec2(0.125, 0.0625);
     vec3 P = vec3(gl_FragCoord.x * 0.5, gl_FragCoord.y * 0.25, 1.0);
     SpeculaShadingInputs s = specula_shading_inputs(P, vec3(0, 0, 1), vec3(0, 0, 1), vec4(1, 0, 0, 1), uv0);
-    vec2 uv, dx, dy; vec3 p, dpx, dpy;
-    spc_geometry_uv(s, uv, dx, dy);
+    vec2 uv, dx, dy, pdx, pdy; vec3 p, dpx, dpy;
+    spc_geometry_uv(s, uv, dx, dy, pdx, pdy);
     spc_geometry_position(s, p, dpx, dpy);
     spc_out = vec4(dx.x, dy.y, dpx.x, dpy.y);
 }

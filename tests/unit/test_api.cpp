@@ -211,7 +211,7 @@ TEST(Api, VersionAndBsdfDoNotLoadImageIo) {
     EXPECT_NE(v.find(std::string("specula ") + SPECULA_VERSION), std::string::npos);
     EXPECT_EQ(v.find("libOpenImageIO"), std::string::npos);
     EXPECT_EQ(v.find("libspecula_io"), std::string::npos);
-    std::string demo = specula::test::sourcePath("examples/demo.json");
+    std::string demo = specula::test::sourcePath("examples/metals.json");
     std::string b = loadedLibs("bsdf " + demo + " --material gold_mirror --wo 0,0,1 --wi 0.3,0,1");
     EXPECT_NE(b.find("\"pdf\""), std::string::npos);
     EXPECT_EQ(b.find("libOpenImageIO"), std::string::npos);

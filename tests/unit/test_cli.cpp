@@ -300,7 +300,7 @@ TEST(Cli, BsdfDrivesTheShadingPointAndBatches) {
 // specula plot --raw writes the lobe panel's float values: a pixel equals specula bsdf for its direction.
 TEST(Cli, PlotRawValuesEqualBsdfQueries) {
     std::string dir = test::tempDir("cli-plot");
-    const std::string demo = test::sourcePath("examples/demo.json");
+    const std::string demo = test::sourcePath("examples/metals.json");
     std::string out;
     ASSERT_EQ(test::runCli("plot " + q(demo) + " --material copper_satin --wo 0.4,0,0.9 --size 64 -o " + q(dir + "/p.png") +
                                " --raw " + q(dir + "/p.exr"),
@@ -320,4 +320,31 @@ TEST(Cli, PlotRawValuesEqualBsdfQueries) {
     nlohmann::json j = nlohmann::json::parse(out);
     for (int c = 0; c < 3; ++c)
         EXPECT_NEAR(beauty->pixels[(size_t(y) * 64 + x) * 3 + c], j["f"][c].get<float>(), 1e-5f * std::max(1.f, j["f"][c].get<float>()));
+}
+
+// specula plot --footprint: a glint lobe at a pixel footprint shows sparkles (a few bright cells, the rest dark),
+// without one the converged, analytic lobe (smooth); the lobe's max/mean over the projected hemisphere tells them apart.
+TEST(Cli, PlotFootprintShowsGlintSparkles) {
+    std::string dir = test::tempDir("cli-plot-glint");
+    test::writeFile(dir + "/g.json", R"({"materials": {"glint": {"nodes": {"g": {"type": "bsdf.glint", "inputs": {"ggaa": "off"}}},
+                                                       "output": "@g.bsdf"}}})");
+    auto plot = [&](const std::string& extra) {
+        std::string out;
+        EXPECT_EQ(test::runCli("plot " + q(dir + "/g.json") + " --material glint --wo 0.3,0,0.95 --size 96 -o " +
+                                   q(dir + "/p.png") + extra,
+                               &out),
+                  0)
+            << out;
+        nlohmann::json j = nlohmann::json::parse(out.substr(out.find('{')));
+        return j["lobe_max"].get<double>() / std::max(j["lobe_mean"].get<double>(), 1e-30);
+    };
+    const double converged = plot(""), sparkles = plot(" --footprint 0.002");
+    // The same footprint through --duvdx/--duvdy gives the same plot.
+    const double explicitDuv = plot(" --duvdx 0.002,0 --duvdy 0,0.002");
+    std::printf("PLOT glint max/mean: converged %.3g, footprint 0.002 %.3g\n", converged, sparkles);
+    EXPECT_LT(converged, 15.0);
+    EXPECT_GT(sparkles, 4.0 * converged);
+    EXPECT_DOUBLE_EQ(sparkles, explicitDuv);
+    // A non-positive footprint is a usage error.
+    EXPECT_NE(test::runCli("plot " + q(dir + "/g.json") + " --material glint --wo 0,0,1 -o " + q(dir + "/x.png") + " --footprint -1"), 0);
 }

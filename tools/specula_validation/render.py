@@ -29,15 +29,23 @@ def overrides_args(spp=None, resolution=None, seed=None, shift_px=None, threads=
 
 
 def rebase_files(scene, src_dir, dst_dir=None):
-    """A copy of 'scene' whose relative 'file' inputs (textures, normal maps), written relative to src_dir, are
-    made absolute (dst_dir None) or relative to dst_dir, so that the JSON can be written anywhere."""
+    """A copy of 'scene' whose relative 'file' keys (texture and normal-map inputs, mesh shapes, environment maps),
+    written relative to src_dir, are made absolute (dst_dir None) or relative to dst_dir, so that the JSON can be
+    written anywhere."""
     s = copy.deepcopy(scene)
+
+    def rebase(obj):
+        f = obj.get("file")
+        if isinstance(f, str) and not os.path.isabs(f):
+            p = os.path.normpath(os.path.join(src_dir, f))
+            obj["file"] = p if dst_dir is None else os.path.relpath(p, dst_dir)
+
     for m in s.get("materials", {}).values():
         for n in m.get("nodes", {}).values():
-            f = n.get("inputs", {}).get("file")
-            if isinstance(f, str) and not os.path.isabs(f):
-                p = os.path.normpath(os.path.join(src_dir, f))
-                n["inputs"]["file"] = p if dst_dir is None else os.path.relpath(p, dst_dir)
+            if isinstance(n.get("inputs"), dict):
+                rebase(n["inputs"])
+    for item in s.get("shapes", []) + s.get("lights", []):
+        rebase(item)
     return s
 
 

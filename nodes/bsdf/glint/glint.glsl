@@ -132,7 +132,8 @@ vec3 spc_glint_frame_rotation(vec2 a, vec3 w) { return vec3(-a.x * w.z, -a.y * w
 
 void spc_bsdf_glint(SpeculaClosureQuery q, SpeculaShadingInputs s, sampler1DArray dictionary, vec3 weight, float sigma_x, float sigma_y, float rho,
                     float log_density, float relative_area, float density_jitter, float max_anisotropy, int ggaa,
-                    float kernel_scale, int derivative, vec3 f0, vec2 lean_mean, vec3 lean_cov, vec3 normal,
+                    float kernel_scale, int derivative, int fresnel, vec3 f0, float ior, vec3 eta, vec3 k,
+                    vec3 base_color, vec2 lean_mean, vec3 lean_cov, vec3 normal,
                     vec3 tangent, vec2 uv, vec2 duvdx, vec2 duvdy, float uv_scale, vec3 dndx, vec3 dndy, out SpeculaClosure bsdf) {
     bsdf = spc_closure_none();
     if (q.kind != SPC_QUERY_DIRECTION) {  // polygon queries: not in GLSL (the CPU has glint_area.h); the host samples this lobe
@@ -232,11 +233,17 @@ void spc_bsdf_glint(SpeculaClosureQuery q, SpeculaShadingInputs s, sampler1DArra
         P = spc_glint_level(dictionary, gq, i0, suv, a1, a2);
         if (w > 0.0) P = (1.0 - w) * P + w * spc_glint_level(dictionary, gq, min(i0 + 1, 15), suv, a1, a2);
     }
-    // S7: D = P / h_z^4, V-cavity G, Schlick F at wo.h; returns f cos = F G D / (4 wo.z).
+    // S7: D = P / h_z^4, V-cavity G, F at wo.h (glint-brdf.md §1; the fresnelPorts model, as GlintLobe's Fresnel);
+    // returns f cos = base_color F G D / (4 wo.z).
     float hz2 = h.z * h.z;
     float D = P / (hz2 * hz2);
     float G = min(1.0, 2.0 * h.z * o.z / woh) * min(1.0, 2.0 * h.z * i.z / wih);
     float fc = G * D / (4.0 * o.z);
     if (!(fc > 0.0)) return;
-    bsdf.f = weight * (spc_fresnel_schlick(woh, f0) * fc);
+    vec3 F = vec3(1.0);
+    if (fresnel == SPC_FRESNEL_SCHLICK) F = spc_fresnel_schlick(woh, f0);
+    else if (fresnel == SPC_FRESNEL_DIELECTRIC) F = vec3(spc_fresnel_dielectric(woh, ior));
+    else if (fresnel == SPC_FRESNEL_CONDUCTOR)
+        F = vec3(spc_fresnel_conductor(woh, eta.x, k.x), spc_fresnel_conductor(woh, eta.y, k.y), spc_fresnel_conductor(woh, eta.z, k.z));
+    bsdf.f = (weight * base_color) * (F * fc);
 }

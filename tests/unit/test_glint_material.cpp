@@ -1,0 +1,119 @@
+// bsdf.glint's material ports (issue 11 item 5): the fresnelPorts() group (schlick | dielectric | conductor | none,
+// evaluated at wo·h) and base_color. The defaults keep the look of scenes made before them (Schlick F0 = 1: F = 1),
+// and at a glinty footprint every model multiplies the same sparkles by base_color · F(wo·h).
+#include "core/graph/graph_material.h"
+#include "core/render/lobes/fresnel.h"
+#include "core/render/material.h"
+#include "core/render/sampling.h"
+#include "core/render/shading.h"
+#include "tests/unit/test_support.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cstdio>
+#include <random>
+
+using namespace specula;
+using nlohmann::json;
+
+namespace {
+
+std::shared_ptr<Material> glint(const json& inputs) {
+    json in = inputs;
+    in["ggaa"] = "off";  // the footprint alone selects the cells: the same sparkles for every Fresnel model
+    return loadGraphMaterial(json{{"nodes", {{"g", {{"type", "bsdf.glint"}, {"inputs", in}}}}}, {"output", "@g.bsdf"}},
+                             "/m", GraphLoadContext{});
+}
+
+// A shading point with a small pixel footprint (sparkles, not the converged lobe); frame = world (normal +z).
+ShadingPoint glintyPoint(const Vec3& wo) {
+    ShadingPoint sp;
+    sp.n = sp.ng = Vec3(0, 0, 1);
+    sp.tangent = Vec4(1, 0, 0, 1);
+    sp.frame = Frame();
+    sp.uv = Vec2(0.37f, 0.61f);
+    sp.duvdx = Vec2(0.002f, 0.f);
+    sp.duvdy = Vec2(0.f, 0.002f);
+    sp.hasDifferentials = true;
+    sp.wo = wo;
+    return sp;
+}
+
+struct Probe {
+    Vec3 wi;
+    Color3 f;
+};
+
+// f·cos of material m at wo for the given directions.
+std::vector<Color3> evalAt(const Material& m, const Vec3& wo, const std::vector<Vec3>& wis, bool footprint = true) {
+    ScratchArena arena;
+    Closure cl;
+    ShadingPoint sp = glintyPoint(wo);
+    if (!footprint) sp.duvdx = sp.duvdy = Vec2(0.f), sp.hasDifferentials = false;  // the converged lobe
+    m.shade(sp, arena, cl);
+    std::vector<Color3> r;
+    for (const Vec3& wi : wis) r.push_back(test::query(cl, wo, wi).f.total());
+    return r;
+}
+
+TEST(GlintMaterial, FresnelModelsAndBaseColorScaleTheSameSparkles) {
+    const Vec3 wo = glm::normalize(Vec3(0.4f, 0.1f, 0.9f));
+    // Directions around the mirror direction, where the sparkles are.
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> u01(0.f, 1.f);
+    std::vector<Vec3> wis;
+    for (int k = 0; k < 4000; ++k) {
+        Vec3 d = glm::normalize(Vec3(-wo.x, -wo.y, wo.z) + 0.5f * Vec3(u01(rng) - 0.5f, u01(rng) - 0.5f, 0.f));
+        wis.push_back(d);
+    }
+    const std::vector<Color3> plain = evalAt(*glint(json::object()), wo, wis);
+    const std::vector<Color3> f0one = evalAt(*glint({{"fresnel", "schlick"}, {"f0", 1.0}}), wo, wis);
+    const std::vector<Color3> none = evalAt(*glint({{"fresnel", "none"}}), wo, wis);
+    const Color3 tint(0.8f, 0.6f, 0.4f), eta(0.2f, 0.9f, 1.1f), kk(3.9f, 2.4f, 1.6f);
+    const std::vector<Color3> conductor = evalAt(
+        *glint({{"fresnel", "conductor"}, {"eta", {eta.x, eta.y, eta.z}}, {"k", {kk.x, kk.y, kk.z}}, {"base_color", {tint.x, tint.y, tint.z}}}),
+        wo, wis);
+    const std::vector<Color3> dielectric = evalAt(*glint({{"fresnel", "dielectric"}, {"ior", 1.7}}), wo, wis);
+    const Color3 f0(0.95f, 0.64f, 0.54f);  // an old scene's Schlick tint (examples/glint/tubes.json)
+    const std::vector<Color3> schlick = evalAt(*glint({{"f0", {f0.x, f0.y, f0.z}}}), wo, wis);
+    int lit = 0;
+    double worst = 0.0;
+    for (size_t k = 0; k < wis.size(); ++k) {
+        // Defaults: F = 1 exactly, as before the Fresnel ports.
+        EXPECT_EQ(plain[k], f0one[k]);
+        EXPECT_EQ(plain[k], none[k]);
+        if (plain[k].x <= 0.f) continue;
+        ++lit;
+        const float c = glm::dot(wo, glm::normalize(wo + wis[k]));  // wo·h
+        const Color3 wantC = plain[k] * tint *
+                             Color3(fresnelConductor(c, eta.x, kk.x), fresnelConductor(c, eta.y, kk.y), fresnelConductor(c, eta.z, kk.z));
+        const Color3 wantD = plain[k] * fresnelDielectric(c, 1.7f);
+        const Color3 wantS = plain[k] * fresnelSchlick(c, f0);
+        for (int ch = 0; ch < 3; ++ch) {
+            for (auto [got, want] : {std::pair{conductor[k][ch], wantC[ch]}, std::pair{dielectric[k][ch], wantD[ch]},
+                                     std::pair{schlick[k][ch], wantS[ch]}}) {
+                const double rel = std::abs(got - want) / std::max(want, 1e-30f);
+                worst = std::max(worst, rel);
+                EXPECT_LE(rel, 1e-5) << "direction " << k << " channel " << ch << ": " << got << " vs " << want;
+            }
+        }
+    }
+    std::printf("GLINT fresnel: %d of %zu directions lit at footprint 0.002; worst rel. error vs plain x base_color x F(wo.h) %.2e\n",
+                lit, wis.size(), worst);
+    EXPECT_GT(lit, 20);
+    // ... and it is sparkles, not a smooth lobe: a few directions far brighter than the typical one.
+    auto peakToMedian = [](const std::vector<Color3>& v) {
+        std::vector<float> lum;
+        for (const Color3& c : v) lum.push_back(luminance(c));
+        std::sort(lum.begin(), lum.end());
+        return lum.back() / std::max(lum[lum.size() / 2], 1e-30f);
+    };
+    const double sparkles = peakToMedian(plain), converged = peakToMedian(evalAt(*glint(json::object()), wo, wis, false));
+    std::printf("GLINT max / median f over the %zu directions: footprint 0.002 %.3g, converged %.3g\n", wis.size(),
+                sparkles, converged);
+    EXPECT_GT(sparkles, 2.0 * converged);
+}
+
+}  // namespace

@@ -1,0 +1,110 @@
+#!/usr/bin/env python3
+"""Renders the glint showcase scenes of examples/showcase/ (issue 11 item 6) with the technique and with the naive
+version beside it, writes the pictures to docs/gallery/ (JPEG, 960x540) and the render times into the generated
+block of docs/gallery.md. Equal render time where the technique costs more per sample (the naive variant then gets
+the spp that takes as long, measured on a quarter-size probe).
+
+Usage: python3 tools/render_showcase.py [--build build] [--only NAME] [--quick]
+  --quick   480x270 pictures into a scratch folder, docs untouched (a smoke run)."""
+import argparse
+import copy
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from specula_validation import ROOT, page  # noqa: E402
+from specula_validation.render import Renderer, rebase_files  # noqa: E402
+
+SHOW = os.path.join(ROOT, "examples", "showcase")
+
+
+def glint_ggaa_off(scene):
+    """The naive glints: every bsdf.glint without geometric glint anti-aliasing (C21 §4 off)."""
+    s = copy.deepcopy(scene)
+    for m in s["materials"].values():
+        for n in m["nodes"].values():
+            if n.get("type") == "bsdf.glint":
+                n.setdefault("inputs", {})["ggaa"] = "off"
+    return s
+
+
+def sampled_lights(scene):
+    """The naive area lights: quad lights point-sampled (render.area_lights 'sampled')."""
+    s = copy.deepcopy(scene)
+    s["render"]["area_lights"] = "sampled"
+    return s
+
+
+# name, scene file, (technique label, naive label, naive transform, equal time?)
+SHOWCASES = [
+    ("carpaint", "glint-carpaint.json", "glints + GGAA under a clear coat", "GGAA off", glint_ggaa_off, False),
+    ("snow", "glint-snow.json", "glints + GGAA", "GGAA off", glint_ggaa_off, False),
+    ("glitter", "glint-glitter.json", "glints integrated over the quad light", "light point-sampled, equal time",
+     sampled_lights, True),
+]
+
+BEGIN, END = "<!-- render_showcase: begin -->", "<!-- render_showcase: end -->"
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--build", default=os.path.join(ROOT, "build"))
+    ap.add_argument("--only", action="append", help="render only these showcases (by name)")
+    ap.add_argument("--quick", action="store_true")
+    a = ap.parse_args()
+    specula = os.path.join(a.build, "bin", "specula")
+    if shutil.which("oiiotool") is None:
+        raise SystemExit("FAIL: oiiotool (Debian: openimageio-tools) is needed to write the JPEG pictures")
+    work = tempfile.mkdtemp(prefix="specula-showcase-")
+    rnd = Renderer(specula, work, scene_dir=SHOW)
+    gal = os.path.join(ROOT, "docs", "gallery") if not a.quick else os.path.join(work, "gallery")
+    os.makedirs(gal, exist_ok=True)
+    times_path = os.path.join(ROOT, "docs", "gallery", "showcase_times.json")
+    times = json.load(open(times_path)) if os.path.exists(times_path) else {}
+    full = None if not a.quick else "480x270"
+    for name, file, tech, naive, transform, equal_time in SHOWCASES:
+        if a.only and name not in a.only:
+            continue
+        scene = json.load(open(os.path.join(SHOW, file)))
+        spp = scene["render"]["spp"]
+        exr, t = rnd.render(scene, name, resolution=full)
+        naive_scene = transform(scene)
+        naive_spp = spp
+        if equal_time:  # the spp the naive variant renders in the technique's time (quarter-size probes of both)
+            w, h = scene["render"]["width"] // 4, scene["render"]["height"] // 4
+            _, tp = rnd.render(scene, name + "_probe", resolution=f"{w}x{h}")
+            _, tn = rnd.render(naive_scene, name + "_naive_probe", resolution=f"{w}x{h}")
+            naive_spp = max(1, int(round(spp * tp / max(tn, 1e-6))))
+        exr_n, tn_full = rnd.render(naive_scene, name + "_naive", spp=naive_spp, resolution=full)
+        for src, dst in ((exr, f"{name}.jpg"), (exr_n, f"{name}_naive.jpg")):
+            subprocess.run(["oiiotool", src[:-4] + ".png", "--compression", "jpeg:92", "-o", os.path.join(gal, dst)],
+                           check=True)
+        times[name] = {"scene": file, "spp": spp, "seconds": t, "naive_spp": naive_spp, "naive_seconds": tn_full,
+                       "technique": tech, "naive": naive}
+        print(f"{name}: {t:.1f} s at {spp} spp; naive ({naive}) {tn_full:.1f} s at {naive_spp} spp", flush=True)
+    if a.quick:
+        print("quick run: pictures in", gal)
+        return
+    with open(times_path, "w") as f:
+        json.dump(times, f, indent=1, sort_keys=True)
+    rows = []
+    for name, file, *_ in SHOWCASES:
+        if name in times:
+            r = times[name]
+            rows.append([name, f"`examples/showcase/{r['scene']}`", f"{r['technique']}, {r['spp']} spp",
+                         f"{r['seconds']:.1f} s", f"{r['naive']}, {r['naive_spp']} spp", f"{r['naive_seconds']:.1f} s"])
+    block = ["Render times on this machine (2 cores, `python3 tools/render_showcase.py`, 960 × 540):", ""] + \
+        page.table(["showcase", "scene", "technique", "time", "naive", "time"], rows)
+    gm = os.path.join(ROOT, "docs", "gallery.md")
+    text = page.replace_block(open(gm).read(), BEGIN, END, "\n".join(block))
+    with open(gm + ".tmp", "w") as f:
+        f.write(text)
+    os.replace(gm + ".tmp", gm)
+
+
+if __name__ == "__main__":
+    main()
