@@ -136,7 +136,7 @@ void spc_bsdf_glint(SpeculaClosureQuery q, SpeculaShadingInputs s, sampler1DArra
                     vec3 base_color, vec2 lean_mean, vec3 lean_cov, vec3 normal,
                     vec3 tangent, vec2 uv, vec2 duvdx, vec2 duvdy, float uv_scale, vec3 dndx, vec3 dndy, out SpeculaClosure bsdf) {
     bsdf = spc_closure_none();
-    if (q.kind != SPC_QUERY_DIRECTION) {  // no closed form over polygons: the host samples this lobe
+    if (q.kind != SPC_QUERY_DIRECTION) {  // polygon queries: not in GLSL (the CPU has glint_area.h); the host samples this lobe
         bsdf.partial = true;
         return;
     }

@@ -156,7 +156,10 @@ void reg(NodeRegistry& r) {
             "(Chermain et al. 2021); converges to Cook-Torrance with a correlated Beckmann NDF as density grows. "
             "The LOD footprint and the GGAA derivatives are one pixel step at any spp (C21's real-time setting): the "
             "glints are a property of the image, so more samples average the same sparkles instead of revealing "
-            "finer ones.";
+            "finer ones. "
+            "Quad lights in closed form on the CPU (polygon queries, render.area_lights \"ltc\"): each EWA cell's "
+            "slope distribution integrated over the light's half-slope region, at the GGAA MIPs of the light's centre (glint_area.h). The GLSL "
+            "function does not answer polygon queries: it returns partial = true and the host samples the light.";
     s.inputs = kParams.ports();
     s.outputs = kOutputs.ports();
     s.flags = kNeedsDerivatives;

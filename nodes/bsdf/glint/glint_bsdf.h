@@ -132,16 +132,29 @@ inline float sampleLinear(const float* tex, int n, float u) {
 }
 // textureGrad on one dictionary row (127 floats): isotropic GL LOD mu = log2(R max(|g1|, |g2|)), clamped to
 // [0, log2 R]; mu <= 0: MIP 0 linear; else blend MIPs floor(mu) and floor(mu)+1 by frac(mu).
-// The filtered branch (rho = R max(|g1|, |g2|) > 1) on its own, for callers that already have the MIP-0 value.
-inline float textureGradFiltered(const float* row, float u, float rho) {
+struct MipBlend {
+    int m0 = 0;     // first MIP
+    float f = 0.f;  // weight of MIP m0 + 1 (0: MIP m0 alone)
+};
+// The MIP blend for rho = R max(|g1|, |g2|) > 1.
+inline MipBlend textureGradLodOf(float rho) {
     const float mu = std::min(std::log2(rho), float(kMips - 1));
     const float m0f = std::floor(mu);
     const int m0 = int(m0f);
-    const float f = mu - m0f;
-    const float v0 = sampleLinear(row + mipOffset(m0), mipRes(m0), u);
-    if (m0 >= kMips - 1) return v0;
-    const float v1 = sampleLinear(row + mipOffset(m0 + 1), mipRes(m0 + 1), u);
-    return (1.f - f) * v0 + f * v1;
+    return {m0, m0 >= kMips - 1 ? 0.f : mu - m0f};
+}
+inline MipBlend textureGradLod(float g1, float g2) {  // shared with the area-light integral (glint_area.cpp)
+    const float rho = float(kRes) * std::max(std::abs(g1), std::abs(g2));
+    if (!(rho > 1.f)) return {};
+    return textureGradLodOf(rho);
+}
+// The filtered branch (rho = R max(|g1|, |g2|) > 1) on its own, for callers that already have the MIP-0 value.
+inline float textureGradFiltered(const float* row, float u, float rho) {
+    const MipBlend b = textureGradLodOf(rho);
+    const float v0 = sampleLinear(row + mipOffset(b.m0), mipRes(b.m0), u);
+    if (!(b.f > 0.f)) return v0;
+    const float v1 = sampleLinear(row + mipOffset(b.m0 + 1), mipRes(b.m0 + 1), u);
+    return (1.f - b.f) * v0 + b.f * v1;
 }
 inline float textureGrad1D(const float* row, float u, float g1, float g2) {
     const float rho = float(kRes) * std::max(std::abs(g1), std::abs(g2));
@@ -226,6 +239,26 @@ inline int cellDictionaryLod(uint32_t S, float lc, float jitter) {
     return int(std::clamp(std::floor(ld + 0.5f), 0.f, float(kLevels)));
 }
 inline int marginalIndex(float u) { return std::min(int(float(kMarginals) * u), kMarginals - 1); }
+
+// The per-cell draws of S4.1-S4.5 that do not depend on h~ (the area-light integral, glint_area.h): occupancy,
+// dictionary level k (k = L: converged), rotation theta and the marginal indices i, j; the same numbers as cellSdf.
+struct CellDraw {
+    bool empty = true, converged = false;
+    int k = 0, i = 0, j = 0;
+    float theta = 0.f;
+};
+inline CellDraw drawCell(const SdfQuery& q, int l, int s, int t) {
+    CellDraw d;
+    const uint32_t S = cellSeed(l, s, t);
+    if (hashUniform(13u * S) > q.relArea) return d;  // empty cell (sparse glints)
+    d.empty = false;
+    d.k = cellDictionaryLod(S, q.lcBase + float(l), q.jitter);
+    d.converged = d.k == kLevels;
+    d.theta = 2.f * kPi * hashUniform(S);
+    d.i = marginalIndex(hashUniform(16807u * S));
+    d.j = marginalIndex(hashUniform(48271u * S));
+    return d;
+}
 
 // S4 (C20 Alg. 3 with the C21 matrix) and S5 (C21 Eqs. 15, 19): the SDF of cell (s, t) at level l. The five uniforms
 // are those of cellRandom, hashed only when needed: u_A first (an empty cell costs one hash), then u_z.
@@ -885,6 +918,10 @@ public:
         out.push_back({"ggaa", {p_.ggaa ? 1.0 : 0.0}});
         out.push_back({"footprint_duv", {in_.duvdx.x, in_.duvdx.y, in_.duvdy.x, in_.duvdy.y}});
     }
+    // Quad lights (issue 11 item 2): the per-cell polygon integral and the shadow-ray direction (glint_area.cpp).
+    bool integratePolygon(const LobeQuery& q, const Vec3* vertices, int count, Color3& result) const override;
+    bool samplePolygon(const LobeQuery& q, const Vec3* vertices, int count, const Vec2& u, uint64_t seed,
+                       Vec3& wi) const override;
     const GlintParams& params() const { return p_; }
     const GlintEvalInputs& inputs() const { return in_; }
     // The footprint's cells (built on first use): shared with the area-light integral of the same shading point.
