@@ -432,7 +432,7 @@ std::string torusScene(int spp, const char* mode, int seed, bool ggaa) {
            std::to_string(seed) + R"(, "area_lights": ")" + mode + R"("},
         "camera": {"position": [0, -2.2, 1.3], "look_at": [0, 0, 0.1], "fov": 40},
         "materials": {"glint": {"nodes": {"g": {"type": "bsdf.glint", "inputs": {"sigma_x": 0.2, "sigma_y": 0.2,
-            "log_density": 13, "f0": [0.95, 0.64, 0.54], "uv_scale": 4, "ggaa": ")" + std::string(ggaa ? "on" : "off") +
+            "log_density": 13, "f0": [0.95, 0.64, 0.54], "uv_scale": 4, "quad_lights": "integrated", "ggaa": ")" + std::string(ggaa ? "on" : "off") +
            R"("}}}, "output": "@g.bsdf"}},
         "shapes": [{"type": "torus", "major_radius": 1.0, "minor_radius": 0.4, "material": "glint"}],
         "lights": [{"type": "quad", "position": [0.6, 0.8, 2.2], "look_at": [0, 0, 0], "size": [0.6, 0.4], "power": 30}]})";

@@ -514,7 +514,22 @@ void checkChi2AndPdfOfSample(const Case& c) {
 // Polygon queries (LTC quad lights), for closures whose lobes integrate polygons: the integral is additive over a split
 // of the light, zero seen from behind (one-sided), and each lobe's polygon samples (the shadow-ray directions) fall
 // in the sub-quads in proportion to its sub-integrals (χ², 3 dof) and always inside the light.
+// Lobes whose polygon integral is a quadrature, not a closed form: additivity holds to their integration error.
+struct ApproximatePolygonIntegral {
+    const char* node;
+    float additivity;
+    const char* why;
+};
+const ApproximatePolygonIntegral kApproximatePolygonIntegrals[] = {
+    {"bsdf.glint", 2e-3f,
+     "the light's edges map to curves in half-slope space, split into chords to 1e-4 (M^-1 space), and the smooth "
+     "factor G (wo.h)/(h_z wo.z) is taken per piece: a split light is chorded and pieced differently (measured 8e-4)"},
+};
+
 void checkPolygonQueries(const Case& c) {
+    float additivity = 2e-4f;
+    for (const auto& e : kApproximatePolygonIntegrals)
+        if (c.node == e.node) additivity = e.additivity;
     Shaded s;
     shade(c.node, c.inputs, c.wo, s);
     const Closure& cl = s.closure;
@@ -542,7 +557,7 @@ void checkPolygonQueries(const Case& c) {
     BsdfEval sum;
     for (int k = 0; k < 4; ++k) cl.integratePolygon(q, sub[k].data(), 4, sum, subLobe[k].data());
     for (int ch = 0; ch < 3; ++ch)
-        EXPECT_NEAR(sum.total()[ch], all.total()[ch], 2e-4f * std::max(all.total()[ch], 1e-3f)) << "additivity";
+        EXPECT_NEAR(sum.total()[ch], all.total()[ch], additivity * std::max(all.total()[ch], 1e-3f)) << "additivity";
     auto inside = [](const Vec3& w, const std::array<Vec3, 4>& v) {
         Vec3 n = glm::cross(v[1] - v[0], v[2] - v[0]);
         float den = glm::dot(w, n);

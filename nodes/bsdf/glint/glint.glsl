@@ -132,7 +132,7 @@ vec3 spc_glint_frame_rotation(vec2 a, vec3 w) { return vec3(-a.x * w.z, -a.y * w
 
 void spc_bsdf_glint(SpeculaClosureQuery q, SpeculaShadingInputs s, sampler1DArray dictionary, vec3 weight, float sigma_x, float sigma_y, float rho,
                     float log_density, float relative_area, float density_jitter, float max_anisotropy, int ggaa,
-                    float kernel_scale, int derivative, int fresnel, vec3 f0, float ior, vec3 eta, vec3 k,
+                    float kernel_scale, int derivative, int quad_lights, int fresnel, vec3 f0, float ior, vec3 eta, vec3 k,
                     vec3 base_color, vec2 lean_mean, vec3 lean_cov, vec3 normal,
                     vec3 tangent, vec2 uv, vec2 duvdx, vec2 duvdy, float uv_scale, vec3 dndx, vec3 dndy, out SpeculaClosure bsdf) {
     bsdf = spc_closure_none();

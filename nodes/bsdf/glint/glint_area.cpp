@@ -687,6 +687,7 @@ bool glintSamplePolygonByCells(const Dictionary& dict, const GlintParams& p, con
 // ---- GlintLobe's polygon entries (declared in glint_bsdf.h) ----------------------------------------------------
 
 bool GlintLobe::integratePolygon(const LobeQuery& q, const Vec3* vertices, int count, Color3& result) const {
+    if (!p_.integrateQuadLights) return false;  // bsdf.glint quad_lights = "sampled": the integrator samples the light
     result = Color3(0.f);
     GlintAreaResult r;
     if (glintPolygonIntegral(dict_, p_, shape_, in_, q.wo, vertices, count, r) && r.integral > 0.f)
@@ -696,7 +697,7 @@ bool GlintLobe::integratePolygon(const LobeQuery& q, const Vec3* vertices, int c
 
 bool GlintLobe::samplePolygon(const LobeQuery& q, const Vec3* vertices, int count, const Vec2& u, uint64_t seed,
                               Vec3& wi) const {
-    return q.wo.z > 0.f && glintSamplePolygonByCells(dict_, p_, shape_, in_, q.wo, vertices, count, u, seed, wi);
+    return p_.integrateQuadLights && q.wo.z > 0.f && glintSamplePolygonByCells(dict_, p_, shape_, in_, q.wo, vertices, count, u, seed, wi);
 }
 
 }  // namespace specula::glint

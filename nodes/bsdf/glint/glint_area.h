@@ -46,7 +46,7 @@ struct GlintAreaSettings {
     int maxSplitDepth = 2;
     // Pieces where that spread is below this use the factor at their area centroid and the cells' masses alone
     // (half the table reads of the moments).
-    float constantFactorSpread = 0.05f;
+    float constantFactorSpread = 0.1f;
 };
 
 struct GlintAreaResult {

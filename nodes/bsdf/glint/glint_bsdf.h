@@ -28,6 +28,9 @@ struct GlintParams {
     // GlintLobe::sample: the glint distribution of the shading point mixed with the Beckmann lobe (true), or the
     // limiting Beckmann lobe alone (false: the sampler before issue 11, kept for the variance comparisons).
     bool sampleGlints = true;
+    // Quad lights (polygon queries): integrate each cell's distribution over the light's half-vector region
+    // (glint_area.h; noise-free, ~10-30x the cost of a light sample) or let the integrator sample the light.
+    bool integrateQuadLights = false;
 };
 
 constexpr int kCellCap = 100;  // the GLSL's cap on evaluated cells per LOD (spec §3 S3); hits are counted
