@@ -1,0 +1,178 @@
+// Exact P-NDF evaluation (spec §2.2, §3.1; paper Eq. 5): brute-force scan and min-max quadtree traversal.
+#include "nodes/bsdf/glint_pndf/pndf_eval.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace specula::pndf {
+
+namespace {
+constexpr double kPiD = 3.14159265358979323846;
+double cross(const Vec2d& p, const Vec2d& q) { return p.x * q.y - p.y * q.x; }
+}  // namespace
+
+Footprint Footprint::fromUv(Vec2 uv, double tiles, int width, int height, double sigmaU, double sigmaV,
+                            FootprintKernel kernel) {
+    auto fracd = [](double v) { return v - std::floor(v); };
+    Footprint fp;
+    fp.centreX = fracd(double(uv.x) * tiles) * width;
+    fp.centreY = fracd(double(uv.y) * tiles) * height;
+    fp.sigmaU = sigmaU;
+    fp.sigmaV = sigmaV;
+    fp.kernel = kernel;
+    return fp;
+}
+
+double footprintHalfWidth(double duDX, double duDY, double scaleK, double texels) {
+    double sigma = scaleK * 0.5 * (std::abs(duDX) + std::abs(duDY)) * texels;
+    if (!(sigma >= 1.0)) return 1.0;  // also NaN and zero differentials (indirect bounces, spec §1)
+    return std::min(sigma, 128.0);
+}
+
+double truncatedGaussianMass() {
+    static const double mass = [] {
+        double m1 = std::erf(3.0 / std::sqrt(2.0));
+        return m1 * m1;
+    }();
+    return mass;
+}
+
+double kernelWeight(const Footprint& fp, double dx, double dy) {
+    const double su = fp.sigmaU, sv = fp.sigmaV;
+    switch (fp.kernel) {
+        case FootprintKernel::Gaussian: {
+            if (std::abs(dx) > su || std::abs(dy) > sv) return 0.0;
+            // Std σ/3 per axis (σ is a 3-std half-width, spec §1): 1/(2π (σu/3)(σv/3)) = 9/(2π σu σv).
+            double q = 4.5 * (dx * dx / (su * su) + dy * dy / (sv * sv));
+            double w = 9.0 / (2.0 * kPiD * su * sv) * std::exp(-q);
+            return fp.gaussianUnitMass ? w / truncatedGaussianMass() : w;
+        }
+        case FootprintKernel::Box:
+            if (std::abs(dx) > su || std::abs(dy) > sv) return 0.0;
+            return 1.0 / (4.0 * su * sv);
+        case FootprintKernel::Disk: {
+            // The true ellipse test (spec §1 fixes the code, which tested only the box: mass 4/π).
+            double q = dx * dx / (su * su) + dy * dy / (sv * sv);
+            return q <= 1.0 ? 1.0 / (kPiD * su * sv) : 0.0;
+        }
+    }
+    return 0.0;
+}
+
+double triangleContribution(const ManifoldTriangle& tri, const Vec2d& s, const Footprint& fp) {
+    const Vec2d d{s.x - tri.sOrigin.x, s.y - tri.sOrigin.y};
+    // Cramer's rule on s - o = t1 e1 + t2 e2 (spec §2.2), dividing by the signed J.
+    const double invJ = 1.0 / tri.jacobian;
+    const double t1 = cross(d, tri.sEdge2) * invJ;
+    const double t2 = cross(tri.sEdge1, d) * invJ;
+    if (t1 < 0.0 || t2 < 0.0 || t1 + t2 > 1.0) return 0.0;
+    const double x = tri.xOrigin.x + t1 * tri.xStep1.x + t2 * tri.xStep2.x;
+    const double y = tri.xOrigin.y + t1 * tri.xStep1.y + t2 * tri.xStep2.y;
+    return kernelWeight(fp, x - fp.centreX, y - fp.centreY) * std::abs(invJ);
+}
+
+IndexRange footprintRange(const Footprint& fp, int level) {
+    const double size = double(1 << level);
+    IndexRange r;
+    r.colLo = int(std::floor((fp.centreX - fp.sigmaU) / size));
+    r.colHi = int(std::ceil((fp.centreX + fp.sigmaU) / size)) - 1;
+    r.rowLo = int(std::floor((fp.centreY - fp.sigmaV) / size));
+    r.rowHi = int(std::ceil((fp.centreY + fp.sigmaV) / size)) - 1;
+    return r;
+}
+
+int entryLevel(const PndfManifold& manifold, const Footprint& fp) {
+    double sigmaMax = std::max(fp.sigmaU, fp.sigmaV);
+    int level = sigmaMax > 0 ? int(std::ceil(std::log2(sigmaMax))) + 1 : 0;
+    return std::clamp(level, 0, manifold.levelCount() - 1);
+}
+
+namespace {
+
+// Sum of the two triangles of one (unwrapped) cell.
+inline double cellContribution(const PndfManifold& manifold, int row, int col, const Vec2d& s, const Footprint& fp,
+                               EvalStats* stats) {
+    ManifoldTriangle tris[2];
+    manifold.cellTriangles(row, col, tris);
+    double sum = 0.0;
+    for (const ManifoldTriangle& t : tris) {
+        double c = triangleContribution(t, s, fp);
+        if (c > 0.0) {
+            sum += c;
+            if (stats) ++stats->trianglesHit;
+        }
+    }
+    if (stats) ++stats->cellsTested;
+    return sum;
+}
+
+// The disk kernel's support is the ellipse: a node whose texel rectangle misses it carries no mass.
+inline bool rectMissesEllipse(const Footprint& fp, double x0, double y0, double x1, double y1) {
+    double dx = std::clamp(fp.centreX, x0, x1) - fp.centreX;
+    double dy = std::clamp(fp.centreY, y0, y1) - fp.centreY;
+    return dx * dx / (fp.sigmaU * fp.sigmaU) + dy * dy / (fp.sigmaV * fp.sigmaV) > 1.0;
+}
+
+}  // namespace
+
+double evalPndfBruteForce(const PndfManifold& manifold, const Footprint& fp, const Vec2d& s, EvalStats* stats) {
+    const IndexRange r = footprintRange(fp, 0);
+    double sum = 0.0;
+    for (int row = r.rowLo; row <= r.rowHi; ++row)
+        for (int col = r.colLo; col <= r.colHi; ++col) sum += cellContribution(manifold, row, col, s, fp, stats);
+    return sum;
+}
+
+double evalPndfHierarchy(const PndfManifold& manifold, const Footprint& fp, const Vec2d& s, EvalStats* stats) {
+    struct Node {
+        int level, row, col;
+    };
+    // A per-thread vector, reused across queries: the entry level can hold many nodes when the map's size (not
+    // divisible by large powers of two) limits the level count, so a fixed-size stack would not do.
+    thread_local std::vector<Node> stack;
+    stack.clear();
+    const int l0 = entryLevel(manifold, fp);
+    const IndexRange top = footprintRange(fp, l0);
+    for (int row = top.rowLo; row <= top.rowHi; ++row)
+        for (int col = top.colLo; col <= top.colHi; ++col) stack.push_back({l0, row, col});
+    const bool disk = fp.kernel == FootprintKernel::Disk;
+    double sum = 0.0;
+    while (!stack.empty()) {
+        const Node n = stack.back();
+        stack.pop_back();
+        if (stats) ++stats->nodesVisited;
+        if (!manifold.bounds(n.level, n.row, n.col).contains(s.x, s.y)) continue;
+        if (disk) {
+            const double size = double(1 << n.level);
+            if (rectMissesEllipse(fp, n.col * size, n.row * size, (n.col + 1) * size, (n.row + 1) * size)) continue;
+        }
+        if (n.level == 0) {
+            sum += cellContribution(manifold, n.row, n.col, s, fp, stats);
+            continue;
+        }
+        // Children, clipped again to the footprint's range at their level (spec §3.1).
+        const int cl = n.level - 1;
+        const IndexRange r = footprintRange(fp, cl);
+        const int rowLo = std::max(2 * n.row, r.rowLo), rowHi = std::min(2 * n.row + 1, r.rowHi);
+        const int colLo = std::max(2 * n.col, r.colLo), colHi = std::min(2 * n.col + 1, r.colHi);
+        for (int row = rowLo; row <= rowHi; ++row)
+            for (int col = colLo; col <= colHi; ++col) stack.push_back({cl, row, col});
+    }
+    return sum;
+}
+
+NormalBounds footprintNormalBounds(const PndfManifold& manifold, const Footprint& fp) {
+    const IndexRange r = footprintRange(fp, 0);
+    NormalBounds nb = manifold.bounds(0, r.rowLo, r.colLo);
+    for (int row = r.rowLo; row <= r.rowHi; ++row)
+        for (int col = r.colLo; col <= r.colHi; ++col) {
+            const NormalBounds& b = manifold.bounds(0, row, col);
+            nb.minX = std::min(nb.minX, b.minX);
+            nb.minY = std::min(nb.minY, b.minY);
+            nb.maxX = std::max(nb.maxX, b.maxX);
+            nb.maxY = std::max(nb.maxY, b.maxY);
+        }
+    return nb;
+}
+
+}  // namespace specula::pndf

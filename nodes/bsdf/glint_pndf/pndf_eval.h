@@ -1,0 +1,78 @@
+// Exact position-normal NDF D_P(s) of a footprint on a PndfManifold (Wu et al. 2024 Eq. 5, spec §2.2): the sum
+// over the normal triangles whose image contains s of K(x_T(s) - x_q)/|J_T|, by brute force or min-max traversal.
+//
+// Spec: shared/specs/pndf-manifold.md §1 (kernels and their normalisation, footprint half-widths), §2.2 (hit test by
+// Cramer's rule, contribution K/|J|), §2.3 (clamped triangles are inverted through the same affine map), §3.1 (entry
+// level, node index range, stack traversal). D_P is a pdf over the projected disk (∫ D_P d²s = ∫ K = 1, paper Eq. 2),
+// and also the microfacet D in solid angle since d²s = cosθ_m dω_m. Clusters (§3.2) are not in this slice.
+#pragma once
+
+#include "nodes/bsdf/glint_pndf/pndf_manifold.h"
+
+#include <cstdint>
+
+namespace specula::pndf {
+
+enum class FootprintKernel : uint8_t { Gaussian = 0, Box = 1, Disk = 2 };
+
+// An axis-aligned footprint in texel units (spec §1): centre x_q = (x, y) with x along columns (u) and y along
+// rows (v), half-widths σ_u, σ_v in texels.
+struct Footprint {
+    double centreX = 0, centreY = 0;
+    double sigmaU = 1, sigmaV = 1;
+    FootprintKernel kernel = FootprintKernel::Gaussian;
+    // Spec §1: the authors' Gaussian (std σ/3, truncated to the |Δ| <= σ box) is not renormalised, mass 0.99461.
+    // true (default) divides by the truncated mass so that ∫ D_P = 1 for every kernel and sampling by rejection
+    // inside the box (the spec §2.4 fix) matches eval exactly; false reproduces the authors' code.
+    bool gaussianUnitMass = true;
+
+    // Footprint from texture coordinates: x = frac(u·tiles)·N along columns (spec §1), σ already in texels.
+    static Footprint fromUv(Vec2 uv, double tiles, int width, int height, double sigmaU, double sigmaV,
+                            FootprintKernel kernel);
+};
+
+// Spec §1: σ_u = k·(|∂u/∂X| + |∂u/∂Y|)/2 (likewise σ_v) from the untiled uv's per-pixel ray differentials, in
+// texels of a map of `texels` across one uv unit (N·tiles), clamped to [1, 128].
+double footprintHalfWidth(double duDX, double duDY, double scaleK, double texels);
+
+// The truncated Gaussian's mass inside its ±3-std box: erf(3/√2)² = 0.994608 (spec §1).
+double truncatedGaussianMass();
+
+// Normalised kernel K_σ(Δ) on the texel plane (spec §1), zero outside the box (Gaussian, box) or ellipse (disk).
+double kernelWeight(const Footprint& fp, double dx, double dy);
+
+// The contribution of one triangle to D_P(s): K(x_T(s) - x_q)/|J_T| when s lies in its normal image (closed
+// edges), else 0. Spec §2.2 Cramer's rule; the same affine map inverts replaced triangles (§2.3).
+double triangleContribution(const ManifoldTriangle& tri, const Vec2d& s, const Footprint& fp);
+
+// Work counters of one query, for benchmarks and the culling tests.
+struct EvalStats {
+    uint64_t nodesVisited = 0;      // hierarchy nodes popped (brute force: 0)
+    uint64_t cellsTested = 0;       // cells whose two triangles were hit-tested
+    uint64_t trianglesHit = 0;      // triangles containing s with a non-zero kernel weight
+};
+
+// Inclusive range of cells (level 0) or nodes of level ℓ that the footprint's support box touches, per axis:
+// i_lo = ⌊(x_q-σ)/2^ℓ⌋, i_hi = ⌈(x_q+σ)/2^ℓ⌉-1 (spec §3.1, Appendix C). Unwrapped indices.
+struct IndexRange {
+    int colLo, colHi, rowLo, rowHi;
+};
+IndexRange footprintRange(const Footprint& fp, int level);
+
+// Spec §3.1 entry level ℓ0 = clamp(⌈log2 max(σ_u,σ_v)⌉ + 1, 0, levelCount-1).
+int entryLevel(const PndfManifold& manifold, const Footprint& fp);
+
+// D_P(s) by testing both triangles of every cell in the footprint's support box (spec §6 invariant 5's reference).
+double evalPndfBruteForce(const PndfManifold& manifold, const Footprint& fp, const Vec2d& s,
+                          EvalStats* stats = nullptr);
+
+// D_P(s) by the min-max quadtree (spec §3.1): from the entry level, nodes whose normal bounds exclude s, or whose
+// texel extent misses the kernel support (box range, and the ellipse for the disk kernel), are culled; cells of
+// the surviving level-0 nodes are hit-tested. Equal to the brute force up to summation order.
+double evalPndfHierarchy(const PndfManifold& manifold, const Footprint& fp, const Vec2d& s,
+                         EvalStats* stats = nullptr);
+
+// Union of the level-0 normal bounds of the cells in the footprint's support: an s-AABB that holds D_P's support.
+NormalBounds footprintNormalBounds(const PndfManifold& manifold, const Footprint& fp);
+
+}  // namespace specula::pndf

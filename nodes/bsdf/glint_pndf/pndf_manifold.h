@@ -1,0 +1,100 @@
+// Position-normal manifold of a normal map (Wu et al. 2024, issue 12 slice 1): the texel grid triangulated into
+// affine position->projected-normal triangles with Jacobian clamping, plus the min-max quadtree of normal bounds.
+//
+// Spec: shared/specs/pndf-manifold.md §1 (texture space, vertices at integer corners, periodic wrap), §2.1
+// (anti-diagonal split), §2.2 (Jacobian), §2.3 (equilateral replacement, ε_J), §3.1 (min-max levels). Paper
+// (shared/seeds/wu2024-position-normal-manifold-glints.txt) Sec. 4.1: mesh-based manifold, the Jacobian as twice the
+// normal-triangle area, and the replacement of near-singular triangles; Fig. 5a: the min-max hierarchy.
+// No cluster hierarchy yet (spec §3.2): a later slice.
+#pragma once
+
+#include "core/math/math.h"
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace specula::pndf {
+
+// Spec §2.3: the clamp on |J| (twice the normal-triangle area per unit texel parameter, in s-units²/texel²).
+constexpr double kDefaultJacobianClamp = 1e-6;
+
+// A 2D vector in double: the hit test and kernel weights are evaluated in double so that the hierarchy and the
+// brute force scan (which share this code) agree to round-off, and float32 storage error stays the only error.
+struct Vec2d {
+    double x = 0, y = 0;
+};
+
+// One triangle of the manifold as the affine map of spec §2.1/§2.3, parametrised by (t1, t2) with t1, t2 >= 0,
+// t1 + t2 <= 1:   s = sOrigin + t1·sEdge1 + t2·sEdge2   and   x = xOrigin + t1·xStep1 + t2·xStep2.
+// For T⁺ (a, b, d): sOrigin = a, edges b-a and d-a, xOrigin = (c, r), steps (+1,0), (0,+1).
+// For T⁻ (d, b, e): sOrigin = e, edges d-e and b-e (weights α = 1-ξ of d and β = 1-η of b), xOrigin = (c+1, r+1),
+// steps (-1,0), (0,-1). A replaced (equilateral) triangle keeps the same x parametrisation, so it keeps the
+// kernel mass of its texel half-cell (spec §2.3: normalisation is preserved).
+struct ManifoldTriangle {
+    Vec2d sOrigin, sEdge1, sEdge2;
+    Vec2d xOrigin, xStep1, xStep2;
+    double jacobian = 0;   // signed cross(sEdge1, sEdge2); |jacobian| >= ε_J after clamping
+    bool replaced = false; // true when the original |J| < ε_J and the equilateral triangle E is used
+};
+
+// Axis-aligned bounds in projected-normal space, (min_x, min_y, max_x, max_y) as in spec §3.1.
+struct NormalBounds {
+    float minX, minY, maxX, maxY;
+    bool contains(double sx, double sy) const { return sx >= minX && sx <= maxX && sy >= minY && sy <= maxY; }
+};
+
+class PndfManifold {
+public:
+    // Builds the manifold from width x height unit normals, row-major (row r = texture v = y, column c = u = x),
+    // in the local shading frame. The projected normal is s = (n_x, n_y) of the normalised input (spec §1:
+    // "channels R,G are used directly as s"; normalising first makes slightly non-unit decoded maps consistent
+    // with m(s) = (s, sqrt(1-|s|²))). Throws std::invalid_argument for an empty map or a size mismatch.
+    PndfManifold(const std::vector<Vec3>& normals, int width, int height,
+                 double jacobianClamp = kDefaultJacobianClamp);
+
+    int width() const { return width_; }
+    int height() const { return height_; }
+    double jacobianClamp() const { return jacobianClamp_; }
+
+    // Projected normal of vertex (row, col), wrapped periodically (spec §1: indexing wraps modulo N).
+    Vec2 vertex(int row, int col) const {
+        return projected_[static_cast<size_t>(wrap(row, height_)) * width_ + wrap(col, width_)];
+    }
+
+    // The two triangles of cell (row, col), with row/col *unwrapped* (any integer): positions x are reported in
+    // unwrapped texel coordinates so that a footprint crossing the seam sees a continuous periodic tiling.
+    // out[0] = T⁺ (upper, ξ+η < 1), out[1] = T⁻ (lower).
+    void cellTriangles(int row, int col, ManifoldTriangle out[2]) const;
+
+    // Min-max quadtree (spec §3.1), level 0 = one AABB per cell over its 4 corners plus any replacement vertices;
+    // level ℓ = 2x2 min/max pool of level ℓ-1. Levels exist while width and height are both divisible by 2^ℓ
+    // (so every node maps to whole cells under periodic wrap), up to level kMaxLevel.
+    static constexpr int kMaxLevel = 8;
+    int levelCount() const { return static_cast<int>(levels_.size()); }
+    int levelWidth(int level) const { return width_ >> level; }
+    int levelHeight(int level) const { return height_ >> level; }
+    // Bounds of node (row, col) of a level, row/col unwrapped.
+    const NormalBounds& bounds(int level, int row, int col) const {
+        int w = levelWidth(level), h = levelHeight(level);
+        return levels_[level][static_cast<size_t>(wrap(row, h)) * w + wrap(col, w)];
+    }
+
+    // Bytes held by the projected normals and the bound levels (build-memory accounting, issue 12 item 2).
+    size_t memoryBytes() const;
+
+    static int wrap(int i, int n) {
+        int m = i % n;
+        return m < 0 ? m + n : m;
+    }
+
+private:
+    void buildBounds();
+
+    int width_ = 0, height_ = 0;
+    double jacobianClamp_ = kDefaultJacobianClamp;
+    std::vector<Vec2> projected_;                 // s per vertex, float32 (8 bytes/texel as in spec §1)
+    std::vector<std::vector<NormalBounds>> levels_;
+};
+
+}  // namespace specula::pndf
