@@ -132,7 +132,9 @@ double evalPndfHierarchy(const PndfManifold& manifold, const Footprint& fp, cons
     thread_local std::vector<Node> stack;
     stack.clear();
     const int l0 = entryLevel(manifold, fp);
-    const IndexRange top = footprintRange(fp, l0);
+    IndexRange ranges[PndfManifold::kMaxLevel + 1];  // the footprint's range per level, computed once per query
+    for (int l = 0; l <= l0; ++l) ranges[l] = footprintRange(fp, l);
+    const IndexRange& top = ranges[l0];
     for (int row = top.rowLo; row <= top.rowHi; ++row)
         for (int col = top.colLo; col <= top.colHi; ++col) stack.push_back({l0, row, col});
     const bool disk = fp.kernel == FootprintKernel::Disk;
@@ -152,7 +154,7 @@ double evalPndfHierarchy(const PndfManifold& manifold, const Footprint& fp, cons
         }
         // Children, clipped again to the footprint's range at their level (spec §3.1).
         const int cl = n.level - 1;
-        const IndexRange r = footprintRange(fp, cl);
+        const IndexRange& r = ranges[cl];
         const int rowLo = std::max(2 * n.row, r.rowLo), rowHi = std::min(2 * n.row + 1, r.rowHi);
         const int colLo = std::max(2 * n.col, r.colLo), colHi = std::min(2 * n.col + 1, r.colHi);
         for (int row = rowLo; row <= rowHi; ++row)

@@ -84,6 +84,7 @@ public:
     size_t memoryBytes() const;
 
     static int wrap(int i, int n) {
+        if (static_cast<unsigned>(i) < static_cast<unsigned>(n)) return i;  // common case: no division
         int m = i % n;
         return m < 0 ? m + n : m;
     }
