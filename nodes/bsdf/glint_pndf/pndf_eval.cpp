@@ -68,7 +68,8 @@ double triangleContribution(const ManifoldTriangle& tri, const Vec2d& s, const F
     if (t1 < 0.0 || t2 < 0.0 || t1 + t2 > 1.0) return 0.0;
     const double x = tri.xOrigin.x + t1 * tri.xStep1.x + t2 * tri.xStep2.x;
     const double y = tri.xOrigin.y + t1 * tri.xStep1.y + t2 * tri.xStep2.y;
-    return kernelWeight(fp, x - fp.centreX, y - fp.centreY) * std::abs(invJ);
+    // K/|det ∂s/∂x|: ∂s/∂x = (∂s/∂t)(∂t/∂x), so |det| = |J|/xArea (xArea = 4^ℓ for clusters, spec §3.2).
+    return kernelWeight(fp, x - fp.centreX, y - fp.centreY) * std::abs(invJ) * tri.xArea;
 }
 
 IndexRange footprintRange(const Footprint& fp, int level) {
@@ -123,7 +124,11 @@ double evalPndfBruteForce(const PndfManifold& manifold, const Footprint& fp, con
     return sum;
 }
 
-double evalPndfHierarchy(const PndfManifold& manifold, const Footprint& fp, const Vec2d& s, EvalStats* stats) {
+double evalPndfHierarchy(const PndfManifold& manifold, const Footprint& fp, const Vec2d& s, EvalStats* stats,
+                         double clusterThreshold) {
+    // Spec §3.2 criterion r < ε_c σ_u σ_v; with ε_c = 0 nothing passes (r >= 0) and the result is exact.
+    const double residualLimit = clusterThreshold * fp.sigmaU * fp.sigmaV;
+    const int maxClusterLevel = std::min(manifold.clusterLevelCount(), kMaxQueryClusterLevel);
     struct Node {
         int level, row, col;
     };
@@ -150,6 +155,19 @@ double evalPndfHierarchy(const PndfManifold& manifold, const Footprint& fp, cons
         }
         if (n.level == 0) {
             sum += cellContribution(manifold, n.row, n.col, s, fp, stats);
+            continue;
+        }
+        if (n.level <= maxClusterLevel && manifold.cluster(n.level, n.row, n.col).residual < residualLimit) {
+            ManifoldTriangle tris[2];
+            manifold.clusterTriangles(n.level, n.row, n.col, tris);
+            for (const ManifoldTriangle& t : tris) {
+                double c = triangleContribution(t, s, fp);
+                if (c > 0.0) {
+                    sum += c;
+                    if (stats) ++stats->trianglesHit;
+                }
+            }
+            if (stats) ++stats->clustersUsed;
             continue;
         }
         // Children, clipped again to the footprint's range at their level (spec §3.1).

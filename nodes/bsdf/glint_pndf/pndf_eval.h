@@ -4,7 +4,7 @@
 // Spec: shared/specs/pndf-manifold.md §1 (kernels and their normalisation, footprint half-widths), §2.2 (hit test by
 // Cramer's rule, contribution K/|J|), §2.3 (clamped triangles are inverted through the same affine map), §3.1 (entry
 // level, node index range, stack traversal). D_P is a pdf over the projected disk (∫ D_P d²s = ∫ K = 1, paper Eq. 2),
-// and also the microfacet D in solid angle since d²s = cosθ_m dω_m. Clusters (§3.2) are not in this slice.
+// and also the microfacet D in solid angle since d²s = cosθ_m dω_m. Clusters (§3.2) are optional in the traversal.
 #pragma once
 
 #include "nodes/bsdf/glint_pndf/pndf_manifold.h"
@@ -50,6 +50,7 @@ struct EvalStats {
     uint64_t nodesVisited = 0;      // hierarchy nodes popped (brute force: 0)
     uint64_t cellsTested = 0;       // cells whose two triangles were hit-tested
     uint64_t trianglesHit = 0;      // triangles containing s with a non-zero kernel weight
+    uint64_t clustersUsed = 0;      // cluster nodes whose two triangles replaced their subtree
 };
 
 // Inclusive range of cells (level 0) or nodes of level ℓ that the footprint's support box touches, per axis:
@@ -66,11 +67,17 @@ int entryLevel(const PndfManifold& manifold, const Footprint& fp);
 double evalPndfBruteForce(const PndfManifold& manifold, const Footprint& fp, const Vec2d& s,
                           EvalStats* stats = nullptr);
 
+// Spec §3.1/§3.2: clusters are used at levels 1..4 (B = 2..16); the B = 32 level is built but not queried.
+constexpr int kMaxQueryClusterLevel = 4;
+
 // D_P(s) by the min-max quadtree (spec §3.1): from the entry level, nodes whose normal bounds exclude s, or whose
 // texel extent misses the kernel support (box range, and the ellipse for the disk kernel), are culled; cells of
-// the surviving level-0 nodes are hit-tested. Equal to the brute force up to summation order.
+// the surviving level-0 nodes are hit-tested. Equal to the brute force up to summation order when
+// clusterThreshold = 0. With ε_c = clusterThreshold > 0, a node at level 1..4 whose cluster residual
+// r < ε_c σ_u σ_v is replaced by its two cluster triangles (spec §3.2; r is the true fit error, so ε_c must be
+// recalibrated against the paper's values, which apply to the code's normal-equation residual).
 double evalPndfHierarchy(const PndfManifold& manifold, const Footprint& fp, const Vec2d& s,
-                         EvalStats* stats = nullptr);
+                         EvalStats* stats = nullptr, double clusterThreshold = 0.0);
 
 // Union of the level-0 normal bounds of the cells in the footprint's support: an s-AABB that holds D_P's support.
 NormalBounds footprintNormalBounds(const PndfManifold& manifold, const Footprint& fp);

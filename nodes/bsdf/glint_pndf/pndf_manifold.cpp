@@ -36,7 +36,8 @@ void growBounds(NormalBounds& b, double x, double y) {
 
 }  // namespace
 
-PndfManifold::PndfManifold(const std::vector<Vec3>& normals, int width, int height, double jacobianClamp)
+PndfManifold::PndfManifold(const std::vector<Vec3>& normals, int width, int height, double jacobianClamp,
+                           bool withClusters)
     : width_(width), height_(height), jacobianClamp_(jacobianClamp) {
     if (width <= 0 || height <= 0)
         throw std::invalid_argument("PndfManifold: empty normal map (" + std::to_string(width) + "x" +
@@ -54,35 +55,46 @@ PndfManifold::PndfManifold(const std::vector<Vec3>& normals, int width, int heig
         n /= len;
         projected_[i] = Vec2(n.x, n.y);
     }
+    if (withClusters) buildClusters();  // before the bounds, which must also cover the cluster vertices (§2.4)
     buildBounds();
 }
 
 void PndfManifold::cellTriangles(int row, int col, ManifoldTriangle out[2]) const {
     // Corners of cell (r, c) (spec §2.1): a = s[r,c], b = s[r,c+1], d = s[r+1,c], e = s[r+1,c+1].
-    const Vec2d a = toD(vertex(row, col)), b = toD(vertex(row, col + 1));
-    const Vec2d d = toD(vertex(row + 1, col)), e = toD(vertex(row + 1, col + 1));
-    const double c0 = col, r0 = row;
+    makeTriangles(toD(vertex(row, col)), toD(vertex(row, col + 1)), toD(vertex(row + 1, col)),
+                  toD(vertex(row + 1, col + 1)), col, row, 1.0, out);
+}
 
+void PndfManifold::clusterTriangles(int level, int row, int col, ManifoldTriangle out[2]) const {
+    const ClusterNode& n = cluster(level, row, col);
+    const double size = double(1 << level);
+    makeTriangles(toD(n.a), toD(n.b), toD(n.d), toD(n.e), col * size, row * size, size, out);
+}
+
+void PndfManifold::makeTriangles(const Vec2d& a, const Vec2d& b, const Vec2d& d, const Vec2d& e, double col0,
+                                 double row0, double size, ManifoldTriangle out[2]) const {
     ManifoldTriangle& up = out[0];
     up.sOrigin = a;
     up.sEdge1 = sub(b, a);
     up.sEdge2 = sub(d, a);
-    up.xOrigin = {c0, r0};
-    up.xStep1 = {1, 0};
-    up.xStep2 = {0, 1};
+    up.xOrigin = {col0, row0};
+    up.xStep1 = {size, 0};
+    up.xStep2 = {0, size};
 
     ManifoldTriangle& lo = out[1];
     lo.sOrigin = e;
     lo.sEdge1 = sub(d, e);  // weight α = 1-ξ of d
     lo.sEdge2 = sub(b, e);  // weight β = 1-η of b
-    lo.xOrigin = {c0 + 1, r0 + 1};
-    lo.xStep1 = {-1, 0};
-    lo.xStep2 = {0, -1};
+    lo.xOrigin = {col0 + size, row0 + size};
+    lo.xStep1 = {-size, 0};
+    lo.xStep2 = {0, -size};
 
     const Equilateral eq(jacobianClamp_);
     for (int t = 0; t < 2; ++t) {
         ManifoldTriangle& tri = out[t];
+        tri.xArea = size * size;
         tri.jacobian = cross(tri.sEdge1, tri.sEdge2);
+        // The clamp applies in the triangle's own parameter units: texels for cells, node-local for clusters.
         tri.replaced = !(std::abs(tri.jacobian) >= jacobianClamp_);
         if (!tri.replaced) continue;
         // Spec §2.3: replace by E centred on b so that 1/|J| is clamped to 1/ε_J while the x parametrisation (and
@@ -96,6 +108,109 @@ void PndfManifold::cellTriangles(int row, int col, ManifoldTriangle out[2]) cons
             tri.sEdge2 = {eq.p, -eq.q};
         }
         tri.jacobian = cross(tri.sEdge1, tri.sEdge2);
+    }
+}
+
+void PndfManifold::buildClusters() {
+    clusters_.clear();
+    for (int l = 1; l <= kMaxClusterLevel; ++l) {
+        if ((width_ % (1 << l)) != 0 || (height_ % (1 << l)) != 0) break;
+        const int B = 1 << l, w = levelWidth(l), h = levelHeight(l);
+        std::vector<ClusterNode> level(static_cast<size_t>(w) * h);
+        for (int nr = 0; nr < h; ++nr)
+            for (int nc = 0; nc < w; ++nc) {
+                // Normal equations of paper Eq. 7 / spec §3.2, accumulated exactly per fine triangle: M (4x4, hats
+                // a, b, d, e), β_d and γ_d per component d, all in float64.
+                double M[4][4] = {}, beta[2][4] = {}, gamma[2] = {};
+                for (int r = nr * B; r < (nr + 1) * B; ++r)
+                    for (int c = nc * B; c < (nc + 1) * B; ++c) {
+                        const Vec2d va = toD(vertex(r, c)), vb = toD(vertex(r, c + 1));
+                        const Vec2d vd = toD(vertex(r + 1, c)), ve = toD(vertex(r + 1, c + 1));
+                        // Fine T⁺ = (a, b, d) at (c,r), (c+1,r), (c,r+1); T⁻ = (e, d, b) at (c+1,r+1), (c,r+1), (c+1,r).
+                        const Vec2d sv[2][3] = {{va, vb, vd}, {ve, vd, vb}};
+                        const double xv[2][3][2] = {{{0, 0}, {1, 0}, {0, 1}}, {{1, 1}, {0, 1}, {1, 0}}};
+                        for (int t = 0; t < 2; ++t) {
+                            const double J = cross(sub(sv[t][1], sv[t][0]), sub(sv[t][2], sv[t][0]));
+                            // Spec's recommended weight 1/max(|J|, ε_J): thin triangles give tall peaks in D_P.
+                            const double wT = 1.0 / std::max(std::abs(J), jacobianClamp_);
+                            // Node-local positions of the 3 vertices and the cluster triangle holding T (by its centroid:
+                            // fine anti-diagonals tile the cluster anti-diagonal, so T lies in one of them).
+                            double lx[3], ly[3];
+                            for (int i = 0; i < 3; ++i) {
+                                lx[i] = (c - nc * B + xv[t][i][0]) / B;
+                                ly[i] = (r - nr * B + xv[t][i][1]) / B;
+                            }
+                            const bool upper = (lx[0] + lx[1] + lx[2] + ly[0] + ly[1] + ly[2]) / 3 < 1;
+                            double phi[4][3];
+                            for (int i = 0; i < 3; ++i) {
+                                if (upper) {
+                                    phi[0][i] = 1 - lx[i] - ly[i];
+                                    phi[1][i] = lx[i];
+                                    phi[2][i] = ly[i];
+                                    phi[3][i] = 0;
+                                } else {
+                                    phi[0][i] = 0;
+                                    phi[1][i] = 1 - ly[i];
+                                    phi[2][i] = 1 - lx[i];
+                                    phi[3][i] = lx[i] + ly[i] - 1;
+                                }
+                            }
+                            // ∫_T f g = (|T|/12)(Σ f_i g_i + Σ f_i Σ g_i) for linear f, g; |T| = 1/2 texel².
+                            const double k = wT * 0.5 / 12.0;
+                            auto integ = [k](const double* f, const double* g) {
+                                return k * (f[0] * g[0] + f[1] * g[1] + f[2] * g[2] +
+                                            (f[0] + f[1] + f[2]) * (g[0] + g[1] + g[2]));
+                            };
+                            const double sx[3] = {sv[t][0].x, sv[t][1].x, sv[t][2].x};
+                            const double sy[3] = {sv[t][0].y, sv[t][1].y, sv[t][2].y};
+                            for (int p = 0; p < 4; ++p) {
+                                for (int q = 0; q < 4; ++q) M[p][q] += integ(phi[p], phi[q]);
+                                beta[0][p] -= integ(phi[p], sx);
+                                beta[1][p] -= integ(phi[p], sy);
+                            }
+                            gamma[0] += integ(sx, sx);
+                            gamma[1] += integ(sy, sy);
+                        }
+                    }
+                // Solve M ĉ_d = -β_d (SPD 4x4) by Gaussian elimination with partial pivoting, both components at once.
+                double A[4][6];
+                for (int p = 0; p < 4; ++p) {
+                    for (int q = 0; q < 4; ++q) A[p][q] = M[p][q];
+                    A[p][4] = -beta[0][p];
+                    A[p][5] = -beta[1][p];
+                }
+                for (int col = 0; col < 4; ++col) {
+                    int piv = col;
+                    for (int p = col + 1; p < 4; ++p)
+                        if (std::abs(A[p][col]) > std::abs(A[piv][col])) piv = p;
+                    for (int q = 0; q < 6; ++q) std::swap(A[col][q], A[piv][q]);
+                    for (int p = col + 1; p < 4; ++p) {
+                        const double f = A[p][col] / A[col][col];
+                        for (int q = col; q < 6; ++q) A[p][q] -= f * A[col][q];
+                    }
+                }
+                double ch[2][4];
+                for (int d = 0; d < 2; ++d)
+                    for (int p = 3; p >= 0; --p) {
+                        double v = A[p][4 + d];
+                        for (int q = p + 1; q < 4; ++q) v -= A[p][q] * ch[d][q];
+                        ch[d][p] = v / A[p][p];
+                    }
+                // True fit error E(ĉ*) = Σ_d (γ_d - β_dᵀ M⁻¹ β_d) = Σ_d (γ_d + β_dᵀ ĉ*_d) >= 0 (spec §3.2 fix), in
+                // texel-area units weighted by 1/|J|; clamped at 0 against round-off.
+                double res = 0;
+                for (int d = 0; d < 2; ++d) {
+                    res += gamma[d];
+                    for (int p = 0; p < 4; ++p) res += beta[d][p] * ch[d][p];
+                }
+                ClusterNode& node = level[static_cast<size_t>(nr) * w + nc];
+                node.residual = float(std::max(0.0, res));
+                node.a = Vec2(float(ch[0][0]), float(ch[1][0]));
+                node.b = Vec2(float(ch[0][1]), float(ch[1][1]));
+                node.d = Vec2(float(ch[0][2]), float(ch[1][2]));
+                node.e = Vec2(float(ch[0][3]), float(ch[1][3]));
+            }
+        clusters_.push_back(std::move(level));
     }
 }
 
@@ -142,6 +257,22 @@ void PndfManifold::buildBounds() {
                         nb.maxX = std::max(nb.maxX, ch.maxX);
                         nb.maxY = std::max(nb.maxY, ch.maxY);
                     }
+                // Spec §2.4 fix: the bounds also cover this level's cluster triangles (a least-squares fit can
+                // overshoot the original normals), so culling stays valid when eval uses the cluster.
+                if (l <= clusterLevelCount()) {
+                    ManifoldTriangle tris[2];
+                    clusterTriangles(l, r, c, tris);
+                    NormalBounds cb{inf, inf, -inf, -inf};
+                    for (const ManifoldTriangle& t : tris) {
+                        growBounds(cb, t.sOrigin.x, t.sOrigin.y);
+                        growBounds(cb, t.sOrigin.x + t.sEdge1.x, t.sOrigin.y + t.sEdge1.y);
+                        growBounds(cb, t.sOrigin.x + t.sEdge2.x, t.sOrigin.y + t.sEdge2.y);
+                    }
+                    nb.minX = std::min(nb.minX, std::nextafter(cb.minX, -inf));
+                    nb.minY = std::min(nb.minY, std::nextafter(cb.minY, -inf));
+                    nb.maxX = std::max(nb.maxX, std::nextafter(cb.maxX, inf));
+                    nb.maxY = std::max(nb.maxY, std::nextafter(cb.maxY, inf));
+                }
                 cur[static_cast<size_t>(r) * w + c] = nb;
             }
         levels_.push_back(std::move(cur));
@@ -151,6 +282,7 @@ void PndfManifold::buildBounds() {
 size_t PndfManifold::memoryBytes() const {
     size_t bytes = projected_.size() * sizeof(Vec2);
     for (const auto& l : levels_) bytes += l.size() * sizeof(NormalBounds);
+    for (const auto& l : clusters_) bytes += l.size() * sizeof(ClusterNode);
     return bytes;
 }
 

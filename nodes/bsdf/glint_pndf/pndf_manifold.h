@@ -5,7 +5,8 @@
 // (anti-diagonal split), §2.2 (Jacobian), §2.3 (equilateral replacement, ε_J), §3.1 (min-max levels). Paper
 // (shared/seeds/wu2024-position-normal-manifold-glints.txt) Sec. 4.1: mesh-based manifold, the Jacobian as twice the
 // normal-triangle area, and the replacement of near-singular triangles; Fig. 5a: the min-max hierarchy.
-// No cluster hierarchy yet (spec §3.2): a later slice.
+// Cluster hierarchy (spec §3.2, paper Eq. 7): least-squares cluster corner normals per 2^ℓ block with weights
+// 1/max(|J_T|, ε_J) and the true fit residual in float64 (the spec's recommended fix), levels 1..5.
 #pragma once
 
 #include "core/math/math.h"
@@ -35,6 +36,7 @@ struct ManifoldTriangle {
     Vec2d sOrigin, sEdge1, sEdge2;
     Vec2d xOrigin, xStep1, xStep2;
     double jacobian = 0;   // signed cross(sEdge1, sEdge2); |jacobian| >= ε_J after clamping
+    double xArea = 1;      // |cross(xStep1, xStep2)|: 1 for a texel triangle, 4^ℓ for a level-ℓ cluster triangle
     bool replaced = false; // true when the original |J| < ε_J and the equilateral triangle E is used
 };
 
@@ -44,14 +46,22 @@ struct NormalBounds {
     bool contains(double sx, double sy) const { return sx >= minX && sx <= maxX && sy >= minY && sy <= maxY; }
 };
 
+// One node of the cluster hierarchy (spec §3.2): 9 floats, the residual and the four corner normals of the block,
+// a = node-local (0,0), b = (1,0), d = (0,1), e = (1,1), triangulated along the anti-diagonal like a cell.
+struct ClusterNode {
+    float residual;
+    Vec2 a, b, d, e;
+};
+
 class PndfManifold {
 public:
     // Builds the manifold from width x height unit normals, row-major (row r = texture v = y, column c = u = x),
     // in the local shading frame. The projected normal is s = (n_x, n_y) of the normalised input (spec §1:
     // "channels R,G are used directly as s"; normalising first makes slightly non-unit decoded maps consistent
     // with m(s) = (s, sqrt(1-|s|²))). Throws std::invalid_argument for an empty map or a size mismatch.
+    // buildClusters = false skips the cluster fit (spec §3.2), leaving only the min-max levels.
     PndfManifold(const std::vector<Vec3>& normals, int width, int height,
-                 double jacobianClamp = kDefaultJacobianClamp);
+                 double jacobianClamp = kDefaultJacobianClamp, bool buildClusters = true);
 
     int width() const { return width_; }
     int height() const { return height_; }
@@ -80,6 +90,19 @@ public:
         return levels_[level][static_cast<size_t>(wrap(row, h)) * w + wrap(col, w)];
     }
 
+    // Cluster levels 1..clusterLevelCount() (block size 2^ℓ texels); 0 when not built. Spec §3.2 builds B = 2..32
+    // and uses B <= 16 at query time. Node (row, col) unwrapped.
+    static constexpr int kMaxClusterLevel = 5;
+    int clusterLevelCount() const { return static_cast<int>(clusters_.size()); }
+    const ClusterNode& cluster(int level, int row, int col) const {
+        int w = levelWidth(level), h = levelHeight(level);
+        return clusters_[level - 1][static_cast<size_t>(wrap(row, h)) * w + wrap(col, w)];
+    }
+    // The two cluster triangles of node (row, col) at level ℓ >= 1, in the same parametrisation as cellTriangles
+    // (x = 2^ℓ·(node + (ξ,η))) and with the equilateral replacement in node-local units (|Ĵ| < ε_J, so the effective
+    // texel threshold is ε_J/4^ℓ, spec §2.3).
+    void clusterTriangles(int level, int row, int col, ManifoldTriangle out[2]) const;
+
     // Bytes held by the projected normals and the bound levels (build-memory accounting, issue 12 item 2).
     size_t memoryBytes() const;
 
@@ -91,11 +114,15 @@ public:
 
 private:
     void buildBounds();
+    void buildClusters();
+    void makeTriangles(const Vec2d& a, const Vec2d& b, const Vec2d& d, const Vec2d& e, double col0, double row0,
+                       double size, ManifoldTriangle out[2]) const;
 
     int width_ = 0, height_ = 0;
     double jacobianClamp_ = kDefaultJacobianClamp;
     std::vector<Vec2> projected_;                 // s per vertex, float32 (8 bytes/texel as in spec §1)
     std::vector<std::vector<NormalBounds>> levels_;
+    std::vector<std::vector<ClusterNode>> clusters_;  // clusters_[ℓ-1] = level ℓ
 };
 
 }  // namespace specula::pndf
