@@ -328,3 +328,127 @@ TEST(Pndf, HierarchyEqualsBruteForce) {
         EXPECT_LT(cellsHier, cellsBrute);
     }
 }
+
+TEST(Pndf, ClusterFitIsExactOnAnAffineField) {
+    // An affine field is representable by one cluster: the least-squares corners are the field's values at the
+    // block corners and the true residual (spec §3.2 fix) is 0 up to round-off; D_P with every node clustered is
+    // then the closed form of invariant 2.
+    const int n = 64;
+    const double s0x = -0.2, s0y = 0.1, a00 = 0.004, a01 = -0.0015, a10 = 0.002, a11 = 0.005;
+    std::vector<Vec3> normals(size_t(n) * n);
+    for (int r = 0; r < n; ++r)
+        for (int c = 0; c < n; ++c) {
+            double sx = s0x + a00 * c + a01 * r, sy = s0y + a10 * c + a11 * r;
+            normals[size_t(r) * n + c] = Vec3(float(sx), float(sy), float(std::sqrt(1 - sx * sx - sy * sy)));
+        }
+    PndfManifold m(normals, n, n);
+    ASSERT_EQ(m.clusterLevelCount(), 5);
+    double maxCornerErr = 0, maxResidual = 0;
+    for (int l = 1; l <= m.clusterLevelCount(); ++l) {
+        const int B = 1 << l;
+        for (int r = 0; r < m.levelHeight(l) - 1; ++r)  // the last row/column of nodes wraps: not affine there
+            for (int c = 0; c < m.levelWidth(l) - 1; ++c) {
+                const ClusterNode& cn = m.cluster(l, r, c);
+                const Vec2 corners[4] = {cn.a, cn.b, cn.d, cn.e};
+                const int dx[4] = {0, 1, 0, 1}, dy[4] = {0, 0, 1, 1};
+                for (int k = 0; k < 4; ++k) {
+                    double x = (c + dx[k]) * B, y = (r + dy[k]) * B;
+                    maxCornerErr = std::max({maxCornerErr, std::abs(corners[k].x - (s0x + a00 * x + a01 * y)),
+                                             std::abs(corners[k].y - (s0y + a10 * x + a11 * y))});
+                }
+                maxResidual = std::max(maxResidual, double(cn.residual));
+            }
+    }
+    std::printf("[pndf] affine cluster fit: max corner error %.2e, max residual %.2e\n", maxCornerErr, maxResidual);
+    EXPECT_LT(maxCornerErr, 1e-6);
+    EXPECT_LT(maxResidual, 1e-6);
+    const double det = std::abs(a00 * a11 - a01 * a10);
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<double> u(-1, 1);
+    double maxRel = 0;
+    for (int q = 0; q < 300; ++q) {
+        Footprint fp{30.5, 29.5, 3.0 + q % 6, 4.0, FootprintKernel(q % 3)};
+        double x = fp.centreX + u(rng) * fp.sigmaU, y = fp.centreY + u(rng) * fp.sigmaV;
+        double expected = kernelWeight(fp, x - fp.centreX, y - fp.centreY) / det;
+        if (expected == 0) continue;
+        EvalStats st;
+        double got = evalPndfHierarchy(m, fp, {s0x + a00 * x + a01 * y, s0y + a10 * x + a11 * y}, &st, 1.0);
+        EXPECT_GT(st.clustersUsed, 0u);
+        maxRel = std::max(maxRel, std::abs(got - expected) / expected);
+    }
+    std::printf("[pndf] affine field through clusters: max relative error %.2e\n", maxRel);
+    EXPECT_LT(maxRel, 1e-3);
+}
+
+TEST(Pndf, ClusterCutErrorAndCostAreMonotoneInThreshold) {
+    // Spec §6 invariant 6 (per query, not per image): a larger ε_c gives a coarser (nested) cut, so the work falls
+    // and the error of D_P against the exact sum grows. Also: clustered D_P stays normalised (a cluster triangle
+    // carries the kernel mass of its block half exactly).
+    const int n = 128;
+    PndfManifold m(sinusoidMap(n, 31, 10, 0.3), n, n);
+    for (int l = 1; l <= m.clusterLevelCount(); ++l) {
+        std::vector<float> res;
+        for (int r = 0; r < m.levelHeight(l); ++r)
+            for (int c = 0; c < m.levelWidth(l); ++c) res.push_back(m.cluster(l, r, c).residual);
+        std::sort(res.begin(), res.end());
+        std::printf("[pndf] cluster level %d (B=%d): residual median %.3e, 90%% %.3e\n", l, 1 << l, res[res.size() / 2],
+                    res[res.size() * 9 / 10]);
+    }
+    std::mt19937 rng(17);
+    std::uniform_real_distribution<double> u01(0, 1);
+    struct Q {
+        Footprint fp;
+        Vec2d s;
+        double exact;
+    };
+    std::vector<Q> qs;
+    for (int q = 0; q < 1500; ++q) {
+        Footprint fp{u01(rng) * n, u01(rng) * n, 4 + 28 * u01(rng), 0, FootprintKernel(q % 3)};
+        fp.sigmaV = fp.sigmaU;
+        Vec2d s = manifoldNormalAt(m, fp.centreX + (u01(rng) * 2 - 1) * fp.sigmaU,
+                                   fp.centreY + (u01(rng) * 2 - 1) * fp.sigmaV);
+        qs.push_back({fp, s, evalPndfBruteForce(m, fp, s)});
+    }
+    double prevErr = -1, prevWork = 1e300;
+    for (double eps : {0.0, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1}) {
+        double errSum = 0, refSum = 0;
+        uint64_t work = 0, clusters = 0;
+        for (const Q& q : qs) {
+            EvalStats st;
+            double d = evalPndfHierarchy(m, q.fp, q.s, &st, eps);
+            errSum += std::abs(d - q.exact);
+            refSum += q.exact;
+            work += st.nodesVisited;
+            clusters += st.clustersUsed;
+        }
+        double err = errSum / refSum;
+        std::printf("[pndf] eps_c=%.0e: relative L1 error of D %.4f, nodes visited/query %.1f, clusters/query %.2f\n",
+                    eps, err, double(work) / qs.size(), double(clusters) / qs.size());
+        if (eps == 0) {
+            EXPECT_LT(err, 1e-12);
+        }
+        EXPECT_GE(err, prevErr * 0.95);  // monotone up to query noise
+        EXPECT_LE(double(work), prevWork);
+        prevErr = err;
+        prevWork = double(work);
+    }
+    // Normalisation of the clustered D_P with every reachable node clustered.
+    Footprint fp{50.5, 70.25, 12, 12, FootprintKernel::Box};
+    NormalBounds b = footprintNormalBounds(m, fp);
+    for (int l = 1; l <= m.clusterLevelCount(); ++l)  // grow the s-AABB by the cluster bounds of the footprint
+        for (int r = int(std::floor((fp.centreY - fp.sigmaV) / (1 << l))); r <= int((fp.centreY + fp.sigmaV) / (1 << l)); ++r)
+            for (int c = int(std::floor((fp.centreX - fp.sigmaU) / (1 << l))); c <= int((fp.centreX + fp.sigmaU) / (1 << l)); ++c) {
+                const NormalBounds& nb = m.bounds(l, r, c);
+                b.minX = std::min(b.minX, nb.minX), b.minY = std::min(b.minY, nb.minY);
+                b.maxX = std::max(b.maxX, nb.maxX), b.maxY = std::max(b.maxY, nb.maxY);
+            }
+    const int g = 1024;
+    const double hx = (b.maxX - b.minX) / g, hy = (b.maxY - b.minY) / g;
+    double integral = 0;
+    for (int j = 0; j < g; ++j)
+        for (int i = 0; i < g; ++i)
+            integral += evalPndfHierarchy(m, fp, {b.minX + (i + 0.5) * hx, b.minY + (j + 0.5) * hy}, nullptr, 1e30);
+    integral *= hx * hy;
+    std::printf("[pndf] fully clustered D_P (box, sigma 12): ∫D = %.5f\n", integral);
+    EXPECT_NEAR(integral, 1.0, 0.01);
+}
