@@ -1,5 +1,5 @@
 // Position-normal manifold of a normal map (Wu et al. 2024, issue 12 slice 1): the texel grid triangulated into
-// affine position->projected-normal triangles with Jacobian clamping, plus the min-max quadtree of normal bounds.
+// affine position->projected-normal triangles with Jacobian clamping, the min-max quadtree and the cluster hierarchy.
 //
 // Spec: shared/specs/pndf-manifold.md §1 (texture space, vertices at integer corners, periodic wrap), §2.1
 // (anti-diagonal split), §2.2 (Jacobian), §2.3 (equilateral replacement, ε_J), §3.1 (min-max levels). Paper
