@@ -20,62 +20,29 @@ constexpr double kPiD = 3.14159265358979323846;
 constexpr double kLim = 4.0 * kSigmaO;  // support of the cell marginals: |m| < 4 σ_o
 constexpr double kDeltaD = kDelta;      // texel spacing (texel centres at (n + 1/2) δ)
 
-// Cumulative tables of every MIP of every dictionary row (GGAA reads MIPs 1-6, C21 §4.2), built on first use in the
-// layout of Dictionary::cdfNodes: MIP m of res n = 64 >> m has n + 1 nodes, at its n texel centres and at 4 σ_o.
-// 16 x 192 x 134 floats (1.6 MB).
-constexpr int kCdfRowFloats = kRowFloats + kMips;
-constexpr int cdfMipOffset(int m) { return mipOffset(m) + m; }
-const std::vector<float>& mipCdfTable(const Dictionary& dict) {
-    static std::vector<float> table;
-    static std::once_flag once;
-    std::call_once(once, [&] {
-        table.assign(size_t(kLevels) * kMarginals * kCdfRowFloats, 0.f);
-        for (int k = 0; k < kLevels; ++k)
-            for (int d = 0; d < kMarginals; ++d)
-                for (int m = 0; m < kMips; ++m) {
-                    const float* p = dict.mip(k, d, m);
-                    float* c = table.data() + (size_t(k) * kMarginals + d) * kCdfRowFloats + cdfMipOffset(m);
-                    const int n = mipRes(m);
-                    const double s = kLim / n;
-                    // p is constant on [0, s/2] (mirrored repeat) and on [(n - 1/2) s, 4 σ_o], linear in between.
-                    double acc = p[0] * 0.5 * s;
-                    c[0] = float(acc);
-                    for (int i = 0; i + 1 < n; ++i) c[i + 1] = float(acc += s * 0.5 * (double(p[i]) + p[i + 1]));
-                    c[n] = float(acc + p[n - 1] * 0.5 * s);
-                }
-    });
-    return table;
-}
-
 // One cell marginal as the point evaluation reads it: MIP m0 (or, with GGAA, the blend of MIPs m0 and m0 + 1 of
 // textureGrad1D), its value p(|x|) and its signed cumulative F(x) = ∫_0^x p(|x'|) dx' (as Dictionary::marginalCdf
 // for MIP 0). Both are exact for the GL_LINEAR reconstruction: p piecewise linear, F piecewise quadratic between the
 // texel centres of the MIPs read.
 struct FilteredMarginal {
+    const Dictionary* dict;
+    int k, d;
+    int mip[2];
     const float* p[2];
-    const float* c[2];
     int res[2];
     double spacing[2];
     float f = 0.f;  // weight of the second MIP
     int mips = 1;
-    FilteredMarginal(const Dictionary& dict, const std::vector<float>& cdf, int k, int d, MipBlend b) {
+    FilteredMarginal(const Dictionary& dictionary, int level, int marginal, MipBlend b)
+        : dict(&dictionary), k(level), d(marginal) {
         mips = b.f > 0.f ? 2 : 1;
         f = b.f;
         for (int e = 0; e < 2; ++e) {
-            const int m = std::min(b.m0 + e, kMips - 1);
-            p[e] = dict.mip(k, d, m);
-            c[e] = cdf.data() + (size_t(k) * kMarginals + d) * kCdfRowFloats + cdfMipOffset(m);
-            res[e] = mipRes(m);
+            mip[e] = std::min(b.m0 + e, kMips - 1);
+            p[e] = dictionary.mip(k, d, mip[e]);
+            res[e] = mipRes(mip[e]);
             spacing[e] = kLim / res[e];
         }
-    }
-    static double cdfOne(const float* p, const float* c, int n, double s, double ax) {
-        const double t = ax / s - 0.5;
-        if (t <= 0.0) return p[0] * ax;
-        if (t >= n - 1) return std::min(c[n - 1] + p[n - 1] * (ax - (n - 0.5) * s), double(c[n]));
-        const int i = int(t);
-        const double fr = t - i;
-        return c[i] + s * fr * (p[i] + 0.5 * (double(p[i + 1]) - p[i]) * fr);
     }
     // p(|x|) for |x| <= 4 σ_o (the caller keeps |x| inside the support).
     double value(double x) const {
@@ -86,8 +53,8 @@ struct FilteredMarginal {
     }
     double cdf(double x) const {
         const double ax = std::min(std::abs(x), kLim), sign = x < 0.0 ? -1.0 : 1.0;
-        double v = cdfOne(p[0], c[0], res[0], spacing[0], ax);
-        if (mips == 2) v = (1.0 - f) * v + f * cdfOne(p[1], c[1], res[1], spacing[1], ax);
+        double v = dict->mipCdf(k, d, mip[0], ax);
+        if (mips == 2) v = (1.0 - f) * v + f * dict->mipCdf(k, d, mip[1], ax);
         return sign * v;
     }
 };
@@ -192,13 +159,11 @@ double smoothFactor(const Vec3& wo, DVec2 hs, Vec3& h) {
 
 
 DVec3 cellPolygonMoments(const Dictionary& dict, int k, int i, int j, const DVec2* q, int n, MipBlend bx, MipBlend by) {
-    const auto& cdf = mipCdfTable(dict);
-    return polygonMoments<true>(FilteredMarginal(dict, cdf, k, i, bx), FilteredMarginal(dict, cdf, k, j, by), q, n);
+    return polygonMoments<true>(FilteredMarginal(dict, k, i, bx), FilteredMarginal(dict, k, j, by), q, n);
 }
 
 double cellPolygonMass(const Dictionary& dict, int k, int i, int j, const DVec2* q, int n, MipBlend bx, MipBlend by) {
-    const auto& cdf = mipCdfTable(dict);
-    return polygonMoments<false>(FilteredMarginal(dict, cdf, k, i, bx), FilteredMarginal(dict, cdf, k, j, by), q, n).x;
+    return polygonMoments<false>(FilteredMarginal(dict, k, i, bx), FilteredMarginal(dict, k, j, by), q, n).x;
 }
 
 DVec3 gaussianPolygonMoments(const DVec2* q, int n) {
@@ -509,7 +474,6 @@ bool integrateImpl(const Dictionary& dict, const GlintParams& p, const GlintShap
         ddy = ggaaDerivative(in.diff, 1, p.mode, wo, wc, hc, hlen, std::numeric_limits<float>::infinity());
     }
     const SdfQuery q = makeQuery(dict, p, shape, hc, ddx, ddy);
-    const auto& cdfTable = mipCdfTable(dict);
 
     rotated.resize(kMaxRegionVertices);
     // The EWA average of the cells' integrals at level l: the point evaluation's levelSdf with each SDF value
@@ -528,14 +492,14 @@ bool integrateImpl(const Dictionary& dict, const GlintParams& p, const GlintShap
                 return;
             }
             // Rot(-θ): m = (c x + s y, -s x + c y), as cellSdf.
-            const double c = std::cos(double(d.theta)), sn = std::sin(double(d.theta));
+            const double c = d.cosT, sn = d.sinT;
             MipBlend bx, by;  // GGAA: the MIPs of cellSdf's textureGrad1D calls (kernel gradients rotated by -θ)
             if (q.ggaa) {
-                const float cf = std::cos(d.theta), sf = std::sin(d.theta);
+                const float cf = d.cosT, sf = d.sinT;
                 bx = textureGradLod(cf * q.gx.x + sf * q.gx.y, cf * q.gy.x + sf * q.gy.y);
                 by = textureGradLod(-sf * q.gx.x + cf * q.gx.y, -sf * q.gy.x + cf * q.gy.y);
             }
-            const FilteredMarginal X(dict, cdfTable, d.k, d.i, bx), Y(dict, cdfTable, d.k, d.j, by);
+            const FilteredMarginal X(dict, d.k, d.i, bx), Y(dict, d.k, d.j, by);
             for (const Piece& pc : pieces) {
                 if (pc.missesAll) continue;
                 const DVec2* mr = mAll.data() + pc.offset;
@@ -639,7 +603,7 @@ bool glintSamplePolygonByCells(const Dictionary& dict, const GlintParams& p, con
         if (rec.piece < 0) {  // converged: the Gaussian is isotropic; choose a piece by the next uniform
             pieceIndex = int(std::min(unit(splitMix(state)) * pieces.size(), double(pieces.size() - 1)));
         } else {
-            c = std::cos(double(rec.draw.theta)), sn = std::sin(double(rec.draw.theta));
+            c = rec.draw.cosT, sn = rec.draw.sinT;
         }
         const Piece& pc = pieces[pieceIndex];
         if (pc.missesAll && rec.piece >= 0) break;

@@ -237,29 +237,33 @@ struct SdfQuery {
 
 // The dictionary LOD k of a non-empty cell (S4.4-S4.5): l_d = l_c + zeta sqrt(2) erfinv(2 u_z - 1), k = clamp(round(l_d),
 // 0, L); k = L means converged (analytic P_B). S is the cell seed; zeta = 0 skips the hash (0 * erfinv = 0).
-inline int cellDictionaryLod(uint32_t S, float lc, float jitter) {
-    const float ld = jitter != 0.f ? lc + jitter * 1.41421356f * erfinvF(2.f * hashUniform(2171u * S) - 1.f) : lc;
+// dictionaryLod takes erfinv(2 u_z - 1) already computed (CellMemoEntry::erfZ).
+inline int dictionaryLod(float lc, float jitter, float erfZ) {
+    const float ld = jitter != 0.f ? lc + jitter * 1.41421356f * erfZ : lc;
     return int(std::clamp(std::floor(ld + 0.5f), 0.f, float(kLevels)));
+}
+inline int cellDictionaryLod(uint32_t S, float lc, float jitter) {
+    return dictionaryLod(lc, jitter, jitter != 0.f ? erfinvF(2.f * hashUniform(2171u * S) - 1.f) : 0.f);
 }
 inline int marginalIndex(float u) { return std::min(int(float(kMarginals) * u), kMarginals - 1); }
 
 // The per-cell draws of S4.1-S4.5 that do not depend on h~ (the area-light integral, glint_area.h): occupancy,
-// dictionary level k (k = L: converged), rotation theta and the marginal indices i, j; the same numbers as cellSdf.
+// dictionary level k (k = L: converged), the rotation (cos, sin theta) and the marginal indices i, j; the same numbers
+// as cellSdf, read through the per-thread memo.
 struct CellDraw {
     bool empty = true, converged = false;
     int k = 0, i = 0, j = 0;
-    float theta = 0.f;
+    float cosT = 1.f, sinT = 0.f;
 };
 inline CellDraw drawCell(const SdfQuery& q, int l, int s, int t) {
     CellDraw d;
-    const uint32_t S = cellSeed(l, s, t);
-    if (hashUniform(13u * S) > q.relArea) return d;  // empty cell (sparse glints)
+    const CellMemoEntry& r = cellMemo().get(cellSeed(l, s, t));
+    if (r.uA > q.relArea) return d;  // empty cell (sparse glints)
     d.empty = false;
-    d.k = cellDictionaryLod(S, q.lcBase + float(l), q.jitter);
+    d.k = dictionaryLod(q.lcBase + float(l), q.jitter, r.erfZ);
     d.converged = d.k == kLevels;
-    d.theta = 2.f * kPi * hashUniform(S);
-    d.i = marginalIndex(hashUniform(16807u * S));
-    d.j = marginalIndex(hashUniform(48271u * S));
+    d.cosT = r.cosT, d.sinT = r.sinT;
+    d.i = r.i, d.j = r.j;
     return d;
 }
 
@@ -538,14 +542,11 @@ private:
     void addLevel(CellMemo& memo, const uint8_t* support, const GlintParams& p, int l, Vec2 uv, const Footprint& fp) {
         const float lc = p.logDensity / 1.38629436f - float(kLevels - 1) + float(l);  // S4.4
         float sw = 0.f;
-        const float jitterScale = p.jitter * 1.41421356f;
         forEachCell(l, uv, fp.a1, fp.a2, [&](int s, int t, float W) {
             sw += W;
             const CellMemoEntry& r = memo.get(cellSeed(l, s, t));
             if (r.uA > p.relArea) return;  // empty cell: it only normalises
-            // k as cellDictionaryLod computes it (same operations, so the same float result)
-            const float ld = p.jitter != 0.f ? lc + jitterScale * r.erfZ : lc;
-            const int k = int(std::clamp(std::floor(ld + 0.5f), 0.f, float(kLevels)));
+            const int k = dictionaryLod(lc, p.jitter, r.erfZ);
             GlintCell& c = cells[count++];
             c.weight = W;
             if (k == kLevels) {

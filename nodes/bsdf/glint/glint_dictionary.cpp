@@ -113,36 +113,36 @@ Dictionary Dictionary::generate() {
     return dict;
 }
 
-// C[i] = mass over [0, x_i] at the texel centres x_i = (i + 1/2) Delta, in double: the half texel [0, x_0] is flat at
-// p_0 (the mirror of texel 0), each segment between centres is linear, and [x_63, 4 sigma_o] is flat at p_63.
+// C[i] = mass over [0, x_i] at the texel centres x_i = (i + 1/2) s of each MIP (spacing s = 4 sigma_o / n), in double:
+// the half texel [0, x_0] is flat at p_0 (the mirror of texel 0), each segment between centres is linear, and
+// [x_{n-1}, 4 sigma_o] is flat at p_{n-1}.
 void Dictionary::buildCdf() {
-    cdf_.assign(size_t(kLevels) * kMarginals * (kRes + 1), 0.f);
+    cdf_.assign(size_t(kLevels) * kMarginals * kCdfRowFloats, 0.f);
     for (int k = 0; k < kLevels; ++k)
-        for (int d = 0; d < kMarginals; ++d) {
-            const float* p = row(k, d);
-            float* c = cdf_.data() + (size_t(k) * kMarginals + d) * (kRes + 1);
-            double acc = 0.5 * kDelta * p[0];
-            c[0] = float(acc);
-            for (int i = 0; i + 1 < kRes; ++i) {
-                acc += 0.5 * kDelta * (double(p[i]) + double(p[i + 1]));
-                c[i + 1] = float(acc);
+        for (int d = 0; d < kMarginals; ++d)
+            for (int m = 0; m < kMips; ++m) {
+                const float* p = mip(k, d, m);
+                float* c = cdf_.data() + (size_t(k) * kMarginals + d) * kCdfRowFloats + cdfMipOffset(m);
+                const int n = mipRes(m);
+                const double s = 4.0 * kSigmaO / n;
+                double acc = 0.5 * s * p[0];
+                c[0] = float(acc);
+                for (int i = 0; i + 1 < n; ++i) c[i + 1] = float(acc += 0.5 * s * (double(p[i]) + double(p[i + 1])));
+                c[n] = float(acc + 0.5 * s * p[n - 1]);
             }
-            acc += 0.5 * kDelta * p[kRes - 1];
-            c[kRes] = float(acc);
-        }
 }
 
-float Dictionary::marginalCdf(int level, int marginal, float x) const {
-    const float ax = std::abs(x), sign = x < 0.f ? -1.f : 1.f;
-    const float* p = row(level, marginal);
-    const float* c = cdfNodes(level, marginal);
-    const float delta = float(kDelta);
-    const float t = ax / delta - 0.5f;  // position in texel-centre units
-    if (t <= 0.f) return sign * p[0] * ax;
-    if (t >= float(kRes - 1)) return sign * std::min(c[kRes - 1] + p[kRes - 1] * (ax - (kRes - 0.5f) * delta), c[kRes]);
+double Dictionary::mipCdf(int level, int marginal, int m, double ax) const {
+    const float* p = this->mip(level, marginal, m);
+    const float* c = cdfNodes(level, marginal, m);
+    const int n = mipRes(m);
+    const double s = 4.0 * kSigmaO / n;
+    const double t = ax / s - 0.5;  // position in texel-centre units
+    if (t <= 0.0) return p[0] * ax;
+    if (t >= n - 1) return std::min(c[n - 1] + p[n - 1] * (ax - (n - 0.5) * s), double(c[n]));
     const int i = int(t);
-    const float f = t - float(i);
-    return sign * (c[i] + delta * f * (p[i] + 0.5f * (p[i + 1] - p[i]) * f));
+    const double f = t - i;
+    return c[i] + s * f * (p[i] + 0.5 * (double(p[i + 1]) - p[i]) * f);
 }
 
 float Dictionary::sampleMarginal(int level, int marginal, float u) const {

@@ -80,12 +80,19 @@ public:
     // sampleLinear reads), in slope units: marginalCdf(k, d, x) = integral of p_{d,k}(|x'|) over x' in [0, x], an odd
     // function of x with limit +-1/2 at |x| >= 4 sigma_o. The mass over [a, b] is cdf(b) - cdf(a): what integrating a
     // cell's separable slope distribution over a box needs (area lights), and what sampling a cell inverts.
-    float marginalCdf(int level, int marginal, float x) const;
+    float marginalCdf(int level, int marginal, float x) const {
+        return float((x < 0.f ? -1.0 : 1.0) * mipCdf(level, marginal, 0, std::abs(double(x))));
+    }
+    // The same for MIP m (GGAA reads MIPs 1-6, C21 §4.2) at ax >= 0, in double: exact for the piecewise-linear
+    // reconstruction (piecewise quadratic between the MIP's texel centres).
+    double mipCdf(int level, int marginal, int m, double ax) const;
     // The inverse on the half line: x >= 0 with marginalCdf(k, d, x) = u / 2, for u in [0, 1).
     float sampleMarginal(int level, int marginal, float u) const;
-    // Cumulative mass at the 64 texel centres and at 4 sigma_o (65 floats) of (level, marginal).
-    const float* cdfNodes(int level, int marginal) const {
-        return cdf_.data() + (size_t(level) * kMarginals + size_t(marginal)) * (kRes + 1);
+    // Cumulative mass of MIP m (resolution n = 64 >> m) at its n texel centres and at 4 sigma_o (n + 1 floats).
+    static constexpr int kCdfRowFloats = kRowFloats + kMips;
+    static constexpr int cdfMipOffset(int m) { return mipOffset(m) + m; }
+    const float* cdfNodes(int level, int marginal, int m = 0) const {
+        return cdf_.data() + (size_t(level) * kMarginals + size_t(marginal)) * kCdfRowFloats + cdfMipOffset(m);
     }
 
     double generationSeconds() const { return seconds_; }
