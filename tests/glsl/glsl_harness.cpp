@@ -9,9 +9,11 @@
 #include <GL/gl.h>
 #include <GL/glext.h>
 
+#include <algorithm>
 #include <array>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <unistd.h>
 
@@ -208,6 +210,39 @@ GlTexture glResourceTexture(const graph::ResourceImage& img, const std::string& 
     glTexParameteri(t.target, GL_TEXTURE_WRAP_S, GLint(glWrap(img.wrapS)));
     if (t.target != GL_TEXTURE_1D_ARRAY) glTexParameteri(t.target, GL_TEXTURE_WRAP_T, GLint(glWrap(img.wrapT)));
     return t;
+}
+
+void ManifestBindings::add(const nlohmann::json& manifest, const std::vector<graph::ResourceImage>& images) {
+    const nlohmann::json& ub = manifest["uniform_block"];
+    std::vector<char> bytes(std::max<size_t>(ub["size"].get<size_t>(), 16), 0);
+    for (const nlohmann::json& mem : ub["members"]) {
+        const std::vector<float> v = mem["value"].get<std::vector<float>>();
+        std::memcpy(&bytes[mem["offset"].get<size_t>()], v.data(), 4 * v.size());
+    }
+    GLuint buf;
+    glGenBuffers(1, &buf);
+    glBindBuffer(GL_UNIFORM_BUFFER, buf);
+    glBufferData(GL_UNIFORM_BUFFER, GLsizeiptr(bytes.size()), bytes.data(), GL_STATIC_DRAW);
+    buffers_.push_back(buf);
+    bufferBindings_.push_back(ub["binding"].get<unsigned>());
+    const nlohmann::json& res = manifest["resources"];
+    for (size_t r = 0; r < res.size(); ++r) {
+        textures_.push_back(glResourceTexture(images[r], res[r]["glsl_type"].get<std::string>()));
+        textureBindings_.push_back(res[r]["binding"].get<int>());
+    }
+}
+
+void ManifestBindings::bind() const {
+    for (size_t m = 0; m < buffers_.size(); ++m) glBindBufferBase(GL_UNIFORM_BUFFER, bufferBindings_[m], buffers_[m]);
+    for (size_t t = 0; t < textures_.size(); ++t) {
+        glActiveTexture(GLenum(GL_TEXTURE0 + textureBindings_[t]));
+        glBindTexture(textures_[t].target, textures_[t].name);
+    }
+}
+
+ManifestBindings::~ManifestBindings() {
+    for (unsigned b : buffers_) glDeleteBuffers(1, &b);
+    for (const GlTexture& t : textures_) glDeleteTextures(1, &t.name);
 }
 
 }  // namespace specula::glsltest

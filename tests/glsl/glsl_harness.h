@@ -4,6 +4,8 @@
 
 #include "core/graph/node_spec.h"
 
+#include <nlohmann/json.hpp>
+
 #include <functional>
 #include <string>
 #include <vector>
@@ -38,5 +40,23 @@ struct GlTexture {
     unsigned name = 0, target = 0;
 };
 GlTexture glResourceTexture(const graph::ResourceImage& image, const std::string& glslType);
+
+// What a host does with emitted modules: each module's uniform block (member values at their offsets) and resource
+// textures bound at the bindings its manifest lists, nothing else. Owns the GL objects.
+class ManifestBindings {
+public:
+    ManifestBindings() = default;
+    ManifestBindings(const ManifestBindings&) = delete;
+    ManifestBindings& operator=(const ManifestBindings&) = delete;
+    ~ManifestBindings();
+    // images: the module's resources in manifest order (codegen::exportGlslResources).
+    void add(const nlohmann::json& manifest, const std::vector<graph::ResourceImage>& images);
+    void bind() const;
+
+private:
+    std::vector<unsigned> buffers_, bufferBindings_;
+    std::vector<GlTexture> textures_;
+    std::vector<int> textureBindings_;
+};
 
 }  // namespace specula::glsltest

@@ -505,34 +505,16 @@ ModuleResult runModule(const json& mj, std::string* failure) {
         for (int k = 0; k < 7; ++k) d[3 * k] = all[k].x, d[3 * k + 1] = all[k].y, d[3 * k + 2] = all[k].z;
     }
     unsigned dataTex = glsltest::glDataTexture(F / 4, kSamples, data);
-    const json& ub = manifest["uniform_block"];
-    std::vector<char> bytes(std::max<size_t>(ub["size"].get<size_t>(), 16), 0);
-    for (const json& m : ub["members"]) {
-        std::vector<float> v = m["value"].get<std::vector<float>>();
-        std::memcpy(&bytes[m["offset"].get<size_t>()], v.data(), 4 * v.size());
+    std::vector<float> gpu;
+    {
+        glsltest::ManifestBindings host;  // bound from the manifest alone
+        host.add(manifest, images);
+        gpu = glsltest::glRun(prog, 2, kSamples, [&] {
+            host.bind();
+            glActiveTexture(GL_TEXTURE15);
+            glBindTexture(GL_TEXTURE_2D, dataTex);
+        });
     }
-    GLuint buf;
-    glGenBuffers(1, &buf);
-    glBindBuffer(GL_UNIFORM_BUFFER, buf);
-    glBufferData(GL_UNIFORM_BUFFER, GLsizeiptr(bytes.size()), bytes.data(), GL_STATIC_DRAW);
-    std::vector<glsltest::GlTexture> tex;
-    std::vector<int> binding;
-    const json& rl = manifest["resources"];
-    for (size_t r = 0; r < rl.size(); ++r) {
-        tex.push_back(glsltest::glResourceTexture(images[r], rl[r]["glsl_type"].get<std::string>()));
-        binding.push_back(rl[r]["binding"].get<int>());
-    }
-    std::vector<float> gpu = glsltest::glRun(prog, 2, kSamples, [&] {
-        glBindBufferBase(GL_UNIFORM_BUFFER, ub["binding"].get<GLuint>(), buf);
-        for (size_t t = 0; t < tex.size(); ++t) {
-            glActiveTexture(GLenum(GL_TEXTURE0 + binding[t]));
-            glBindTexture(tex[t].target, tex[t].name);
-        }
-        glActiveTexture(GL_TEXTURE15);
-        glBindTexture(GL_TEXTURE_2D, dataTex);
-    });
-    glDeleteBuffers(1, &buf);
-    for (auto& t : tex) glDeleteTextures(1, &t.name);
     glDeleteTextures(1, &dataTex);
     glDeleteProgram(prog);
 

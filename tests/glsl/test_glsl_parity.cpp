@@ -585,40 +585,16 @@ TEST(GlslManifestParity, TwoMaterialsWithResourcesInOneShader) {
     }
     unsigned dataTex = glsltest::glDataTexture(5, kSamples, packed);
     // Everything below is bound from the manifests alone: uniform blocks and resources at their listed bindings.
-    std::vector<GLuint> buffers;
-    std::vector<glsltest::GlTexture> textures;
-    std::vector<int> textureBinding;
-    for (size_t m = 0; m < manifests.size(); ++m) {
-        const json& ub = manifests[m]["uniform_block"];
-        std::vector<char> bytes(std::max<size_t>(ub["size"].get<size_t>(), 16), 0);
-        for (const json& mem : ub["members"]) {
-            std::vector<float> v = mem["value"].get<std::vector<float>>();
-            std::memcpy(&bytes[mem["offset"].get<size_t>()], v.data(), 4 * v.size());
-        }
-        GLuint buf;
-        glGenBuffers(1, &buf);
-        glBindBuffer(GL_UNIFORM_BUFFER, buf);
-        glBufferData(GL_UNIFORM_BUFFER, GLsizeiptr(bytes.size()), bytes.data(), GL_STATIC_DRAW);
-        glBindBufferBase(GL_UNIFORM_BUFFER, ub["binding"].get<GLuint>(), buf);
-        buffers.push_back(buf);
-        const json& res = manifests[m]["resources"];
-        for (size_t r = 0; r < res.size(); ++r) {
-            textures.push_back(glsltest::glResourceTexture(images[m][r], res[r]["glsl_type"].get<std::string>()));
-            textureBinding.push_back(res[r]["binding"].get<int>());
-        }
+    std::vector<float> gpu;
+    {
+        glsltest::ManifestBindings host;
+        for (size_t m = 0; m < manifests.size(); ++m) host.add(manifests[m], images[m]);
+        gpu = glsltest::glRun(prog, 2, kSamples, [&] {
+            host.bind();
+            glActiveTexture(GL_TEXTURE15);
+            glBindTexture(GL_TEXTURE_2D, dataTex);
+        });
     }
-    std::vector<float> gpu = glsltest::glRun(prog, 2, kSamples, [&] {
-        for (size_t m = 0; m < buffers.size(); ++m)
-            glBindBufferBase(GL_UNIFORM_BUFFER, manifests[m]["uniform_block"]["binding"].get<GLuint>(), buffers[m]);
-        for (size_t t = 0; t < textures.size(); ++t) {
-            glActiveTexture(GLenum(GL_TEXTURE0 + textureBinding[t]));
-            glBindTexture(textures[t].target, textures[t].name);
-        }
-        glActiveTexture(GL_TEXTURE15);
-        glBindTexture(GL_TEXTURE_2D, dataTex);
-    });
-    for (GLuint b : buffers) glDeleteBuffers(1, &b);
-    for (auto& t : textures) glDeleteTextures(1, &t.name);
     glDeleteTextures(1, &dataTex);
     glDeleteProgram(prog);
 
@@ -683,30 +659,16 @@ TEST(GlslManifestParity, LtcNormalMapModuleBoundFromItsManifest) {
         std::copy(v, v + 20, &packed[size_t(j) * 20]);
     }
     unsigned dataTex = glsltest::glDataTexture(5, kSamples, packed);
-    const json& ub = manifest["uniform_block"];
-    std::vector<char> bytes(std::max<size_t>(ub["size"].get<size_t>(), 16), 0);
-    for (const json& mem : ub["members"]) {
-        std::vector<float> v = mem["value"].get<std::vector<float>>();
-        std::memcpy(&bytes[mem["offset"].get<size_t>()], v.data(), 4 * v.size());
+    std::vector<float> gpu;
+    {
+        glsltest::ManifestBindings host;
+        host.add(manifest, images);
+        gpu = glsltest::glRun(prog, 1, kSamples, [&] {
+            host.bind();
+            glActiveTexture(GL_TEXTURE15);
+            glBindTexture(GL_TEXTURE_2D, dataTex);
+        });
     }
-    GLuint buf;
-    glGenBuffers(1, &buf);
-    glBindBuffer(GL_UNIFORM_BUFFER, buf);
-    glBufferData(GL_UNIFORM_BUFFER, GLsizeiptr(bytes.size()), bytes.data(), GL_STATIC_DRAW);
-    std::vector<glsltest::GlTexture> textures;
-    for (size_t r = 0; r < images.size(); ++r)
-        textures.push_back(glsltest::glResourceTexture(images[r], manifest["resources"][r]["glsl_type"].get<std::string>()));
-    std::vector<float> gpu = glsltest::glRun(prog, 1, kSamples, [&] {
-        glBindBufferBase(GL_UNIFORM_BUFFER, ub["binding"].get<GLuint>(), buf);
-        for (size_t t = 0; t < textures.size(); ++t) {
-            glActiveTexture(GLenum(GL_TEXTURE0 + manifest["resources"][t]["binding"].get<int>()));
-            glBindTexture(textures[t].target, textures[t].name);
-        }
-        glActiveTexture(GL_TEXTURE15);
-        glBindTexture(GL_TEXTURE_2D, dataTex);
-    });
-    glDeleteBuffers(1, &buf);
-    for (auto& t : textures) glDeleteTextures(1, &t.name);
     glDeleteTextures(1, &dataTex);
     glDeleteProgram(prog);
 
