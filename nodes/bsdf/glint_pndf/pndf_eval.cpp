@@ -124,11 +124,15 @@ double evalPndfBruteForce(const PndfManifold& manifold, const Footprint& fp, con
     return sum;
 }
 
+bool clusterAccepted(const PndfManifold& manifold, int level, int row, int col, const Footprint& fp,
+                     double clusterThreshold) {
+    // Spec §3.2 criterion r < ε_c σ_u σ_v; with ε_c = 0 nothing passes (r >= 0) and the result is exact.
+    if (level < 1 || level > std::min(manifold.clusterLevelCount(), kMaxQueryClusterLevel)) return false;
+    return manifold.cluster(level, row, col).residual < clusterThreshold * fp.sigmaU * fp.sigmaV;
+}
+
 double evalPndfHierarchy(const PndfManifold& manifold, const Footprint& fp, const Vec2d& s, EvalStats* stats,
                          double clusterThreshold) {
-    // Spec §3.2 criterion r < ε_c σ_u σ_v; with ε_c = 0 nothing passes (r >= 0) and the result is exact.
-    const double residualLimit = clusterThreshold * fp.sigmaU * fp.sigmaV;
-    const int maxClusterLevel = std::min(manifold.clusterLevelCount(), kMaxQueryClusterLevel);
     struct Node {
         int level, row, col;
     };
@@ -157,7 +161,7 @@ double evalPndfHierarchy(const PndfManifold& manifold, const Footprint& fp, cons
             sum += cellContribution(manifold, n.row, n.col, s, fp, stats);
             continue;
         }
-        if (n.level <= maxClusterLevel && manifold.cluster(n.level, n.row, n.col).residual < residualLimit) {
+        if (clusterAccepted(manifold, n.level, n.row, n.col, fp, clusterThreshold)) {
             ManifoldTriangle tris[2];
             manifold.clusterTriangles(n.level, n.row, n.col, tris);
             for (const ManifoldTriangle& t : tris) {

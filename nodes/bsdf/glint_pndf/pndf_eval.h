@@ -79,6 +79,12 @@ constexpr int kMaxQueryClusterLevel = 4;
 double evalPndfHierarchy(const PndfManifold& manifold, const Footprint& fp, const Vec2d& s,
                          EvalStats* stats = nullptr, double clusterThreshold = 0.0);
 
+// The cluster test of spec §3.2 that evalPndfHierarchy applies to node (row, col) of `level`: the level is 1..4 (and
+// built) and its residual r < ε_c σ_u σ_v. Sampling (spec §2.4 step 2) uses the same test, top-down from the entry
+// level, so that it draws from the representation eval sums over.
+bool clusterAccepted(const PndfManifold& manifold, int level, int row, int col, const Footprint& fp,
+                     double clusterThreshold);
+
 // Union of the level-0 normal bounds of the cells in the footprint's support: an s-AABB that holds D_P's support.
 NormalBounds footprintNormalBounds(const PndfManifold& manifold, const Footprint& fp);
 
