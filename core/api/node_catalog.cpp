@@ -98,6 +98,7 @@ ojson nodeSpecJson(const NodeSpec& s) {
                  {"file", s.glslFile.empty() ? std::string() : "nodes/" + s.glslFile},
                  {"prototype", s.glslPrototype()}};
     j["parity"] = {{"tolerance", jsonNum(s.parityTolerance)}, {"note", s.parityNote}};
+    if (!s.gpuSubstitute.empty()) j["gpu_substitute"] = s.gpuSubstitute;
     return j;
 }
 

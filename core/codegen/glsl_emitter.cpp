@@ -147,6 +147,11 @@ GlslModule emitGlsl(const GraphDesc& g, const GlslOptions& opt) {
     std::set<std::string> types;
     for (int n : live) types.insert(g.nodes[n].spec->id);
     mod.nodeTypes.assign(types.begin(), types.end());
+    for (const std::string& t : mod.nodeTypes) {
+        const NodeSpec* spec = NodeRegistry::instance().find(t);
+        if (spec && !spec->gpuSubstitute.empty())
+            mod.warnings.push_back(t + ": not supported on the GPU; the GLSL substitutes " + spec->gpuSubstitute);
+    }
 
     const std::string E = mod.entryPrefix;
     std::ostringstream o;
@@ -155,7 +160,9 @@ GlslModule emitGlsl(const GraphDesc& g, const GlslOptions& opt) {
     o << "// Entry points: vec3 " << E << "eval(SpeculaShadingInputs s, vec3 wo, vec3 wi) returns f·cos for one light\n";
     o << "// direction (wo, wi: unit, world space, pointing away from the surface); " << E << "emission(s, wo);\n";
     o << "// " << E << "material(SpeculaClosureQuery q, SpeculaShadingInputs s, out SpeculaClosure c) answers any query.\n";
-    o << "// Bind the uniform block and every resource listed in the module's manifest (specula glsl --resources).\n\n";
+    o << "// Bind the uniform block and every resource listed in the module's manifest (specula glsl --resources).\n";
+    for (const std::string& w : mod.warnings) o << "// WARNING: " << w << "\n";
+    o << "\n";
     o << glslPrelude() << "\n";
     // Enum constants of the live nodes (guarded: shared between nodes and modules).
     {
@@ -199,8 +206,7 @@ GlslModule emitGlsl(const GraphDesc& g, const GlslOptions& opt) {
     for (auto& [file, ids] : files) {
         std::string list;
         for (auto& id : ids) list += (list.empty() ? "" : ", ") + id;
-        std::string guard = "SPC_NODE_FILE_" + glslIdentifier(file);
-        for (char& c : guard) c = char(std::toupper((unsigned char)c));
+        const std::string guard = glslFileGuard(file);
         o << "// ---- nodes/" << file << " (" << list << ")\n#ifndef " << guard << "\n#define " << guard << "\n";
         const std::string* src = codegen::embeddedGlsl(file);
         o << (src ? *src : std::string("#error missing node source ") + file + "\n") << "#endif\n\n";

@@ -51,6 +51,9 @@ struct GlslModule {
     int uniformBinding = 0, uniformSet = -1;
     std::vector<GlslResource> resources;
     std::vector<std::string> nodeTypes;  // used node types, sorted
+    // One line per used node type whose model the GPU cannot run (NodeSpec::gpuSubstitute): "<type>: <what the GLSL
+    // computes instead>". Front ends print each once; the module's header comment repeats them.
+    std::vector<std::string> warnings;
     std::string entryPrefix;             // "specula_" + prefix + "_" (or "specula_"): entry points are <entryPrefix>eval ...
 };
 

@@ -55,6 +55,8 @@ json glslManifest(const GlslModule& mod, const std::vector<graph::ResourceImage>
         res.push_back(j);
     }
     m["resources"] = res;
+    // Node types whose GPU model is a substitute (GlslModule::warnings): a host shows these to the user.
+    if (!mod.warnings.empty()) m["warnings"] = mod.warnings;
     return m;
 }
 

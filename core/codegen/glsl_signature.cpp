@@ -3,6 +3,7 @@
 
 #include "core/util/error.h"
 
+#include <algorithm>
 #include <cctype>
 #include <set>
 #include <stdexcept>
@@ -220,10 +221,14 @@ std::string glslEnumConstant(const PortSpec& p, int index) {
 std::string glslEnumConstants(const NodeSpec& spec) {
     std::string r;
     std::set<std::string> done;
-    // Every node sharing spec's .glsl file: the file may use any of their constants.
+    // Every node sharing spec's .glsl file, or whose .glsl file spec uses as a library: the code may use any of their
+    // constants.
     std::vector<const PortSpec*> ports;
+    auto isLibrary = [&](const std::string& file) {
+        return !file.empty() && std::find(spec.glslLibraries.begin(), spec.glslLibraries.end(), file) != spec.glslLibraries.end();
+    };
     for (const NodeSpec* other : NodeRegistry::instance().all())
-        if (other == &spec || (!spec.glslFile.empty() && other->glslFile == spec.glslFile))
+        if (other == &spec || (!spec.glslFile.empty() && other->glslFile == spec.glslFile) || isLibrary(other->glslFile))
             for (const PortSpec& p : other->inputs) ports.push_back(&p);
     if (!NodeRegistry::instance().find(spec.id))
         for (const PortSpec& p : spec.inputs) ports.push_back(&p);

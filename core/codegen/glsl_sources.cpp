@@ -24,10 +24,15 @@ std::vector<std::string> embeddedGlslPaths() {
     return r;
 }
 
-std::string glslLibraryText(const std::string& relPath) {
+std::string glslFileGuard(const std::string& relPath) {
     // The guard is a macro (not a const): #ifndef works across concatenated modules of one shader.
-    std::string guard = "SPC_LIBRARY_";
+    std::string guard = "SPC_FILE_";
     for (char c : relPath) guard += std::isalnum((unsigned char)c) ? char(std::toupper((unsigned char)c)) : '_';
+    return guard;
+}
+
+std::string glslLibraryText(const std::string& relPath) {
+    const std::string guard = glslFileGuard(relPath);
     const std::string* src = embeddedGlsl(relPath);
     std::string r = "// ---- nodes/" + relPath + " (shared library)\n#ifndef " + guard + "\n#define " + guard + "\n";
     r += src ? *src : "#error missing GLSL library " + relPath + "\n";

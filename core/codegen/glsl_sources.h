@@ -15,6 +15,10 @@ struct GlslSourceRegistrar {
     GlslSourceRegistrar(const char* relPath, const char* text);
 };
 
+// The include guard of a GLSL file (a path relative to nodes/): one macro per file whether it is emitted as a node's own
+// file or as another node's library (bsdf.glint_pndf's GPU substitute calls into texture/lean/lean.glsl and
+// bsdf/ggx_filtered/ggx_filtered.glsl), so a module that also uses those nodes holds each file once.
+std::string glslFileGuard(const std::string& relPath);
 // A shared GLSL library (NodeSpec::glslLibraries, a path relative to nodes/) wrapped in an include guard derived from
 // its path, so that several modules or nodes may each carry a copy; an #error line if it was not embedded.
 std::string glslLibraryText(const std::string& relPath);

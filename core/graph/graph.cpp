@@ -349,7 +349,7 @@ Program Program::compile(const GraphDesc& g, const std::vector<std::pair<int, in
         ins.usedOutputs = usedOut[ni];
         std::fill(std::begin(ins.in), std::end(ins.in), kNoRegister);
         std::fill(std::begin(ins.out), std::end(ins.out), kNoRegister);
-        ins.fn = spec.cpu;
+        ins.fn = load && load->gpuSubstitutes && spec.gpuSubstituteCpu ? spec.gpuSubstituteCpu : spec.cpu;
         bool allConst = true;
         std::vector<std::string> strings(spec.inputs.size());
         for (size_t k = 0; k < spec.inputs.size(); ++k) {

@@ -19,6 +19,9 @@ struct GraphLoadContext {
     TextureStore* textures = nullptr;  // image textures are loaded through it (may be null: no textures)
     std::string baseDir;               // relative texture paths are resolved against it
     std::vector<std::string>* warnings = nullptr;  // where soft-range warnings go (may be null: dropped)
+    // Compile every node that has one with its NodeSpec::gpuSubstituteCpu, the CPU twin of what its GLSL computes
+    // (the parity suite; a CPU rendering of what the GPU will show). false: the real models.
+    bool gpuSubstitutes = false;
 };
 
 // A Material backed by a compiled node graph.

@@ -201,6 +201,12 @@ struct NodeSpec {
     std::vector<std::string> glslLibraries;
     float parityTolerance = 1e-4f;  // max relative error CPU vs GLSL (docs/nodes.md)
     std::string parityNote;         // why a looser tolerance is needed
+    // A node whose CPU model cannot run on the GPU declares it here: gpuSubstitute says in one sentence what its GLSL
+    // function computes instead (the emitter warns with it once per module, docs/nodes.md shows it), and
+    // gpuSubstituteCpu is the CPU twin of that GLSL function, which the parity suite compares it against (cpu stays
+    // the model the renderer uses).
+    std::string gpuSubstitute;
+    CpuFn gpuSubstituteCpu = nullptr;
 
     bool has(uint32_t f) const { return (flags & f) != 0; }
     int inputIndex(const std::string& n) const;

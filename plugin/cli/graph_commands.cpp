@@ -2,6 +2,8 @@
 // object (name -> graph) of a scene JSON file.
 #include "plugin/cli/graph_commands.h"
 
+#include <cstdio>
+
 #include "core/codegen/glsl_emitter.h"
 #include "core/codegen/glsl_manifest.h"
 #include "core/color/color_config.h"
@@ -309,6 +311,7 @@ void addGraphCommands(CLI::App& app, int& exitCode) {
             opt.bindingBase = *gBase;
             opt.set = *gSet;
             codegen::GlslModule m = codegen::emitGlsl(g, opt);
+            for (const std::string& w : m.warnings) std::fprintf(stderr, "specula glsl: warning: %s\n", w.c_str());
             if (!gRes->empty()) {
                 if (!std::filesystem::is_directory(*gRes)) throw IoError("resource folder '" + *gRes + "' does not exist");
                 MaterialInstance mi = instantiate(l);  // loads the textures the resources are made from

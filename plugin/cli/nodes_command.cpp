@@ -338,6 +338,9 @@ std::string nodeMarkdown(const NodeSpec& s) {
         for (auto& l : s.glslLibraries) libs.push_back("`nodes/" + l + "`");
         m += "- GLSL libraries: " + join(libs, ", ") + "\n";
     }
+    if (!s.gpuSubstitute.empty())
+        m += "- **GPU: not supported.** The GLSL function substitutes " + s.gpuSubstitute +
+             " `specula glsl` warns once per module; the parity suite checks the substitute against its CPU twin.\n";
     m += "- parity tolerance: " + tolText(s.parityTolerance);
     if (!s.parityNote.empty()) m += " — " + s.parityNote;
     m += "\n\n";
@@ -425,6 +428,7 @@ std::string nodeText(const NodeSpec& s) {
     t += rows.empty() ? "  (none)\n" : textTable(rows, "  ");
     t += "flags: " + flagsText(s) + "\n";
     t += "glsl: " + s.glslPrototype() + (s.glslFile.empty() ? "" : "  (nodes/" + s.glslFile + ")") + "\n";
+    if (!s.gpuSubstitute.empty()) t += "gpu: not supported; the GLSL substitutes " + s.gpuSubstitute + "\n";
     t += "parity tolerance: " + tolText(s.parityTolerance) + (s.parityNote.empty() ? "" : " — " + s.parityNote) + "\n";
     return t;
 }

@@ -470,8 +470,8 @@ ModuleResult runModule(const json& mj, std::string* failure) {
     codegen::GlslModule mod = codegen::emitGlsl(g);
     // The library once, and each built-in table once however many nodes read it.
     size_t libs = 0;
-    for (size_t p = mod.source.find("#define SPC_LIBRARY_SHARED_LTC_GLSL"); p != std::string::npos;
-         p = mod.source.find("#define SPC_LIBRARY_SHARED_LTC_GLSL", p + 1))
+    for (size_t p = mod.source.find("#define SPC_FILE_SHARED_LTC_GLSL"); p != std::string::npos;
+         p = mod.source.find("#define SPC_FILE_SHARED_LTC_GLSL", p + 1))
         ++libs;
     if (libs != 1) *failure = "shared/ltc.glsl emitted " + std::to_string(libs) + " times";
     std::set<std::string> tables;

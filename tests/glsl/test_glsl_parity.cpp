@@ -282,6 +282,7 @@ ParityResult runParity(const NodeSpec& s, std::string* failure) {
     unsigned dataTex = glsltest::glDataTexture(texW, kSamples, packed);
     // The node's resources, produced from its prepared data exactly as the CPU program prepares it.
     GraphLoadContext load{s.resources.empty() ? nullptr : fixture().store.get(), fixture().dir};
+    load.gpuSubstitutes = true;  // nodes the GPU cannot run are compared with the CPU twin of their GLSL substitute
     std::vector<glsltest::GlTexture> resourceTex;
     for (const graph::ResourceImage& img : codegen::nodeResourceImages(s, resourceStrings(s), std::vector<std::string>(s.inputs.size()), load))
         resourceTex.push_back(glsltest::glResourceTexture(img, s.resources[resourceTex.size()].glslType));

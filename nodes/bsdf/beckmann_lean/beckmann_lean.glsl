@@ -23,14 +23,6 @@ float spc_lean_lambda(vec3 w, vec2 mean, float a, float b, float c) {
     }
     return max(ap / e - 1.0, 0.0);
 }
-// F(1) of the chosen Fresnel model: the F0 of the LTC Fresnel weighting (ltc::fresnelScale; 1 = no Fresnel).
-vec3 spc_lean_fresnel_f0(int fresnel, vec3 f0, float ior, vec3 eta, vec3 k) {
-    if (fresnel == SPC_FRESNEL_SCHLICK) return f0;
-    if (fresnel == SPC_FRESNEL_DIELECTRIC) return vec3(spc_fresnel_dielectric(1.0, ior));
-    if (fresnel == SPC_FRESNEL_CONDUCTOR)
-        return vec3(spc_fresnel_conductor(1.0, eta.x, k.x), spc_fresnel_conductor(1.0, eta.y, k.y), spc_fresnel_conductor(1.0, eta.z, k.z));
-    return vec3(1.0);
-}
 // Polygon queries (BeckmannLeanLobe::integratePolygon): the LTC of an equivalent GGX through shared/ltc.glsl.
 void spc_bsdf_beckmann_lean(SpeculaClosureQuery q, vec3 weight, float roughness, vec2 slope, vec3 covariance, int fresnel,
                             vec3 f0, float ior, vec3 eta, vec3 k, vec3 normal, vec3 tangent, sampler2D ltc_matrix,
@@ -61,7 +53,7 @@ void spc_bsdf_beckmann_lean(SpeculaClosureQuery q, vec3 weight, float roughness,
         vec3 p[4];
         spc_ltc_local_polygon(q, T, B, N, p);
         float e = spc_ltc_integrate(invM, p, q.vertex_count, q.horizon, ltc_amplitude);
-        bsdf.f = weight * (spc_ltc_fresnel_scale(spc_lean_fresnel_f0(fresnel, f0, ior, eta, k), magFres) * e);
+        bsdf.f = weight * (spc_ltc_fresnel_scale(spc_fresnel_f0(fresnel, f0, ior, eta, k), magFres) * e);
         return;
     }
     vec3 o, i, h;

@@ -57,7 +57,7 @@ void reg(NodeRegistry& r) {
     s.cpu = &cpu;
     s.glslFunction = "spc_bsdf_beckmann_lean";
     s.glslFile = "bsdf/beckmann_lean/beckmann_lean.glsl";
-    s.glslLibraries = {"shared/ltc.glsl"};
+    s.glslLibraries = {"shared/ltc.glsl", "shared/fresnel_f0.glsl"};
     // Polygon queries (LTC quad lights through the equivalent GGX): the GGX fits and the mag/fres/sphere table.
     s.resources = {ltc::matrixResource(), ltc::amplitudeResource(), ltc::anisotropicResource()};
     r.add(std::move(s));

@@ -14,14 +14,6 @@ float spc_ggx_lambda(vec3 w, float ax, float ay) {
     float a2tan2 = (px * px + py * py) / z2;
     return 0.5 * (-1.0 + sqrt(1.0 + a2tan2));
 }
-// F(1) of the chosen Fresnel model: the F0 of the LTC Fresnel weighting (ltc::fresnelScale; 1 = no Fresnel).
-vec3 spc_ggx_fresnel_f0(int fresnel, vec3 f0, float ior, vec3 eta, vec3 k) {
-    if (fresnel == SPC_FRESNEL_SCHLICK) return f0;
-    if (fresnel == SPC_FRESNEL_DIELECTRIC) return vec3(spc_fresnel_dielectric(1.0, ior));
-    if (fresnel == SPC_FRESNEL_CONDUCTOR)
-        return vec3(spc_fresnel_conductor(1.0, eta.x, k.x), spc_fresnel_conductor(1.0, eta.y, k.y), spc_fresnel_conductor(1.0, eta.z, k.z));
-    return vec3(1.0);
-}
 // Polygon queries (GgxLobe::integratePolygon): the fitted LTC of this lobe (isotropic 64×64 table, or the anisotropic
 // table for αx != αy; shared/ltc.glsl) times F0·mag + (1 − F0)·fres.
 void spc_bsdf_ggx(SpeculaClosureQuery q, vec3 weight, float roughness, float anisotropy, int fresnel, vec3 f0, float ior,
@@ -42,7 +34,7 @@ void spc_bsdf_ggx(SpeculaClosureQuery q, vec3 weight, float roughness, float ani
         vec3 p[4];
         spc_ltc_local_polygon(q, T, B, N, p);
         float e = spc_ltc_integrate(invM, p, q.vertex_count, q.horizon, ltc_amplitude);
-        bsdf.f = weight * (spc_ltc_fresnel_scale(spc_ggx_fresnel_f0(fresnel, f0, ior, eta, k), magFres) * e);
+        bsdf.f = weight * (spc_ltc_fresnel_scale(spc_fresnel_f0(fresnel, f0, ior, eta, k), magFres) * e);
         return;
     }
     vec3 o, i, h;

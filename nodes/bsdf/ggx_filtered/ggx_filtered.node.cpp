@@ -79,17 +79,6 @@ Filter filterOf(FilterChoice f) {
     return Filter::None;
 }
 
-// A = diag(α_x², α_y²) + 2Σ with Σ made positive semi-definite (|Σ_xy| ≤ sqrt(Σ_xx Σ_yy)); α clamped to
-// [1e-4, 0.999] (the projected variants need α < 1, spec §3.3).
-Sym2 roughnessMatrix(Vec2 alpha, Vec3 cov) {
-    double ax = std::clamp(double(alpha.x), 1e-4, 0.999), ay = std::clamp(double(alpha.y), 1e-4, 0.999);
-    // Σ packed as (var_x, var_y, cov_xy), the layout of texture.lean's covariance output.
-    double sxx = std::max(double(cov.x), 0.0), syy = std::max(double(cov.y), 0.0);
-    double lim = std::sqrt(sxx * syy);
-    double sxy = std::clamp(double(cov.z), -lim, lim);
-    return {ax * ax + 2.0 * sxx, 2.0 * sxy, ay * ay + 2.0 * syy};
-}
-
 void cpu(EvalContext& c, const Instr& i) {
     const Params p = kParams.read(c, i);
     LobeSetup s;

@@ -10,6 +10,7 @@
 #include "core/texture/normal_map_gen.h"
 #include "core/texture/texture_store.h"
 #include "core/util/error.h"
+#include "nodes/shared/normal_map_source.h"
 #include "nodes/shared/texture_ports.h"
 
 #include <glm/gtc/packing.hpp>
@@ -121,37 +122,13 @@ std::shared_ptr<const void> prepare(const PrepareContext& pc) {
     const std::string& file = pc.str("normal_map");
     const bool directx = pc.str("convention") == "directx";
     auto d = std::make_shared<Prepared>();
-    try {
-        if (file.rfind("generate:", 0) == 0) {
-            // generate:<kind>:<size>:<seed>
-            std::string rest = file.substr(9);
-            size_t a = rest.find(':'), b = a == std::string::npos ? a : rest.find(':', a + 1);
-            if (b == std::string::npos) throw std::runtime_error("expected generate:<kind>:<size>:<seed>");
-            NormalMap m = generateNormalMap(parseNormalMapKind(rest.substr(0, a)), std::stoi(rest.substr(a + 1, b - a - 1)),
-                                            std::stoull(rest.substr(b + 1)));
-            d->normals = ltc::NormalMapLtcPrefilter::normalsOf(m);
-            if (directx)
-                for (Vec3& n : d->normals) n.y = -n.y;
-            d->size = m.size;
-        } else {
-            if (!pc.load || !pc.load->textures)
-                throw InputError(pc.pointer("normal_map"),
-                                 "bsdf.ltc_normal_map needs a texture store (none was given to the graph loader)");
-            std::filesystem::path p(file);
-            if (p.is_relative() && !pc.load->baseDir.empty()) p = std::filesystem::path(pc.load->baseDir) / p;
-            TextureStore& store = *pc.load->textures;
-            TextureHandle h = store.load(p.string(), "raw");  // normal maps are data: no colour conversion
-            d->normals = ltc::NormalMapLtcPrefilter::normalsFromEncodedPixels(store.pixels(h).data(), store.width(h),
-                                                                             store.height(h), store.channels(h), directx);
-            d->size = store.width(h);
-        }
-        if (d->size < 1 || (d->size & (d->size - 1)) != 0)
-            throw ltc::PrefilterError("the normal map must be square with a power-of-two size");
-    } catch (const InputError&) {
-        throw;
-    } catch (const std::exception& e) {
-        throw InputError(pc.pointer("normal_map"), std::string("bsdf.ltc_normal_map: cannot load normal map: ") + e.what());
-    }
+    NormalMapSource src = loadNormalMapSource(pc, "normal_map", "bsdf.ltc_normal_map", directx);
+    if (src.width != src.height || src.width < 1 || (src.width & (src.width - 1)) != 0)
+        throw InputError(pc.pointer("normal_map"), "bsdf.ltc_normal_map: normal map '" + file + "' is " +
+                                                       std::to_string(src.width) + "x" + std::to_string(src.height) +
+                                                       "; it must be square with a power-of-two size");
+    d->normals = std::move(src.normals);
+    d->size = src.width;
     // The clamps are cpu()'s (the hard ranges), so its fast path finds exactly these tables.
     d->roughness = clampRoughness(pc.number("roughness"));
     d->strength = clampStrength(pc.number("strength"));

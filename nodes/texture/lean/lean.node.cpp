@@ -4,6 +4,7 @@
 #include "nodes/node_common.h"
 
 #include "core/graph/closure_util.h"
+#include "nodes/shared/lean_resource.h"
 #include "nodes/shared/texture_ports.h"
 #include "core/graph/graph_material.h"
 #include "core/texture/lean_moments.h"
@@ -12,8 +13,6 @@
 
 #include <cstring>
 #include <filesystem>
-#include <map>
-#include <mutex>
 
 namespace specula::nodes {
 namespace {
@@ -68,26 +67,6 @@ struct LeanData {
     std::shared_ptr<const LeanPyramid> pyramid;
 };
 
-// Pyramids are shared between materials that use the same pixels (keyed by a content hash, so a store
-// destroyed and re-created at the same address can never hand out a stale pyramid).
-std::shared_ptr<const LeanPyramid> sharedPyramid(const std::vector<float>& px, int w, int h, int c) {
-    uint64_t hash = 0xcbf29ce484222325ULL;
-    auto mixIn = [&](const void* p, size_t n) {
-        const unsigned char* b = static_cast<const unsigned char*>(p);
-        for (size_t i = 0; i < n; ++i) hash = (hash ^ b[i]) * 0x100000001b3ULL;
-    };
-    int dims[3] = {w, h, c};
-    mixIn(dims, sizeof dims);
-    mixIn(px.data(), px.size() * sizeof(float));
-    static std::mutex mutex;
-    static std::map<uint64_t, std::weak_ptr<const LeanPyramid>> cache;
-    std::lock_guard<std::mutex> lock(mutex);
-    if (auto p = cache[hash].lock()) return p;
-    auto p = std::make_shared<const LeanPyramid>(LeanPyramid::fromEncodedPixels(px.data(), w, h, c, false));
-    cache[hash] = p;
-    return p;
-}
-
 std::shared_ptr<const void> prepare(const PrepareContext& pc) {
     const std::string& file = pc.str("file");
     if (!pc.load || !pc.load->textures)
@@ -101,7 +80,7 @@ std::shared_ptr<const void> prepare(const PrepareContext& pc) {
         if (store.channels(h) < 2)
             throw InputError(pc.pointer("file"), "texture.lean: '" + file + "' has " + std::to_string(store.channels(h)) +
                                                  " channel(s); a tangent-space normal map needs 2 or 3");
-        d->pyramid = sharedPyramid(store.pixels(h), store.width(h), store.height(h), store.channels(h));
+        d->pyramid = sharedLeanPyramid(store.pixels(h), store.width(h), store.height(h), store.channels(h));
     } catch (const InputError&) {
         throw;
     } catch (const std::exception& e) {
@@ -110,21 +89,9 @@ std::shared_ptr<const void> prepare(const PrepareContext& pc) {
     return d;
 }
 
-// The sampler the GLSL reads: LeanPyramid's packed GLSL levels (core/texture/lean_moments.h glslPackedLevel), every
-// level given, read with texelFetch (nearest).
+// The sampler the GLSL reads (nodes/shared/lean_resource.h).
 ResourceImage momentTexels(const void* prepared) {
-    const LeanPyramid& P = *static_cast<const LeanData*>(prepared)->pyramid;
-    ResourceImage r;
-    for (int l = 0; l < P.glslLevels(); ++l) {
-        ResourceImage::Level lv;
-        P.glslLevelSize(l, lv.width, lv.height);
-        lv.rgba = P.glslPackedLevel(l);
-        r.levels.push_back(std::move(lv));
-    }
-    r.minFilter = "nearest_mipmap_nearest";
-    r.magFilter = "nearest";
-    r.wrapS = r.wrapT = "clamp_to_edge";
-    return r;
+    return leanMomentImage(*static_cast<const LeanData*>(prepared)->pyramid);
 }
 
 void cpu(EvalContext& c, const Instr& i) {
