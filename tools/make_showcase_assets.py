@@ -7,6 +7,9 @@ HDRIs or models:
               bright hazy horizon, a warm glow around the sun's azimuth, a grey-white snow ground below the horizon.
   body.obj    a smooth car-body-like superellipsoid (2.4 x 1.2 x 0.7, flat-ish top and sides, rounded edges) with
               analytic normals and (u, v) = (azimuth, polar) parameters, for the car-paint showcase.
+  kettle.obj  a kettle-like surface of revolution (a bulbous body, shoulder, lid and knob; 1.6 wide, 1.3 high) with
+              analytic normals, u = azimuth / 2 pi and v = arc length along the profile / (2 pi x mean radius), so a
+              texel is about square everywhere, for the brushed-metal P-NDF showcase.
 Usage: python3 tools/make_showcase_assets.py [--out examples/showcase]"""
 
 import argparse
@@ -149,6 +152,63 @@ def write_body(path, nu=96, nv=48, size=(1.2, 0.6, 0.35), e_long=0.45, e_lat=0.6
     os.replace(tmp, path)
 
 
+def catmull_rom(points, t):
+    """Centripetal-free (uniform) Catmull-Rom through 'points' at t in [0, 1], with its derivative in t."""
+    n = len(points) - 1
+    x = min(max(t, 0.0), 1.0) * n
+    i = min(int(x), n - 1)
+    f = x - i
+    p0, p1, p2, p3 = (points[max(i - 1, 0)], points[i], points[i + 1], points[min(i + 2, n)])
+    out, der = [], []
+    for k in range(2):
+        a, b, c, d = p0[k], p1[k], p2[k], p3[k]
+        out.append(0.5 * (2 * b + (-a + c) * f + (2 * a - 5 * b + 4 * c - d) * f * f + (-a + 3 * b - 3 * c + d) * f ** 3))
+        der.append(0.5 * ((-a + c) + 2 * (2 * a - 5 * b + 4 * c - d) * f + 3 * (-a + 3 * b - 3 * c + d) * f * f) * n)
+    return out, der
+
+
+# (radius, height) from the centre of the base up to the tip of the knob.
+KETTLE_PROFILE = [(0.0, 0.0), (0.45, 0.0), (0.66, 0.05), (0.78, 0.22), (0.8, 0.42), (0.74, 0.64), (0.58, 0.82),
+                  (0.42, 0.93), (0.36, 0.98), (0.3, 1.04), (0.2, 1.08), (0.09, 1.1), (0.07, 1.18), (0.1, 1.26),
+                  (0.06, 1.3), (0.0, 1.31)]
+
+
+def write_kettle(path, nu=96, nv=72):
+    """Lathe of KETTLE_PROFILE about z; normals from the profile tangent (dr, dz): n = (dz cos, dz sin, -dr)/|.|."""
+    samples = [catmull_rom(KETTLE_PROFILE, j / nv) for j in range(nv + 1)]
+    arc = [0.0]
+    for j in range(1, nv + 1):
+        (r0, z0), (r1, z1) = samples[j - 1][0], samples[j][0]
+        arc.append(arc[-1] + math.hypot(r1 - r0, z1 - z0))
+    mean_r = sum(s[0][0] for s in samples) / len(samples)
+    verts, norms, uvs = [], [], []
+    for j, ((r, z), (dr, dz)) in enumerate(samples):
+        ln = math.hypot(dr, dz) or 1.0
+        nr, nz = dz / ln, -dr / ln
+        if r < 1e-6:  # the poles: the axis
+            nr, nz = 0.0, (-1.0 if j == 0 else 1.0)
+        for i in range(nu + 1):
+            u = i / nu
+            ph = u * 2.0 * math.pi
+            c, s = math.cos(ph), math.sin(ph)
+            verts.append((max(r, 0.0) * c, max(r, 0.0) * s, z))
+            norms.append((nr * c, nr * s, nz))
+            uvs.append((u, arc[j] / (2.0 * math.pi * mean_r)))
+    lines = ["# Specula showcase kettle (tools/make_showcase_assets.py)"]
+    lines += ["v %.4f %.4f %.4f" % p for p in verts]
+    lines += ["vn %.4f %.4f %.4f" % p for p in norms]
+    lines += ["vt %.4f %.4f" % p for p in uvs]
+    w = nu + 1
+    for j in range(nv):
+        for i in range(nu):
+            q = [j * w + i + 1, j * w + i + 2, (j + 1) * w + i + 2, (j + 1) * w + i + 1]
+            lines.append("f " + " ".join("%d/%d/%d" % (k, k, k) for k in q))
+    tmp = path + ".tmp"
+    with open(tmp, "w") as f:
+        f.write("\n".join(lines) + "\n")
+    os.replace(tmp, path)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--out", default=os.path.join(os.path.dirname(__file__), "..", "examples", "showcase"))
@@ -157,7 +217,8 @@ def main():
     write_hdr(os.path.join(a.out, "studio.hdr"), studio)
     write_hdr(os.path.join(a.out, "sky.hdr"), sky)
     write_body(os.path.join(a.out, "body.obj"))
-    print("wrote studio.hdr, sky.hdr and body.obj to", os.path.abspath(a.out))
+    write_kettle(os.path.join(a.out, "kettle.obj"))
+    print("wrote studio.hdr, sky.hdr, body.obj and kettle.obj to", os.path.abspath(a.out))
 
 
 if __name__ == "__main__":

@@ -41,6 +41,38 @@ struct NormalMap {
 //  stone     Voronoi cobbles (bevelled domes, mortar grooves) with two octaves of surface noise, RMS ~0.3.
 NormalMap generateNormalMap(NormalMapKind kind, int size, uint64_t seed);
 
+// 'generate:<kind>:<size>:<seed>' names a generated map wherever a normal-map file is expected (texture.image with
+// colorspace raw, texture.lean, bsdf.ltc_normal_map, bsdf.glint_pndf), so scenes can use large maps without shipping
+// multi-megabyte files. Inline: both libspecula and the image-I/O module parse it.
+inline bool isGeneratedNormalMapName(const std::string& name) { return name.rfind("generate:", 0) == 0; }
+inline NormalMap generateNormalMapFromName(const std::string& name) {
+    const std::string rest = name.substr(9);
+    const size_t a = rest.find(':'), b = a == std::string::npos ? a : rest.find(':', a + 1);
+    if (!isGeneratedNormalMapName(name) || b == std::string::npos)
+        throw NormalMapError("'" + name + "': expected generate:<kind>:<size>:<seed>");
+    int size = 0;
+    unsigned long long seed = 0;
+    try {
+        size_t used = 0;
+        const std::string sizeText = rest.substr(a + 1, b - a - 1), seedText = rest.substr(b + 1);
+        size = std::stoi(sizeText, &used);
+        if (used != sizeText.size()) throw std::invalid_argument("size");
+        seed = std::stoull(seedText, &used);
+        if (used != seedText.size()) throw std::invalid_argument("seed");
+    } catch (const std::logic_error&) {
+        throw NormalMapError("'" + name + "': expected generate:<kind>:<size>:<seed> with integer size and seed");
+    }
+    if (size < 8 || size > 8192) throw NormalMapError("'" + name + "': size must be in [8, 8192]");
+    return generateNormalMap(parseNormalMapKind(rest.substr(0, a)), size, seed);
+}
+// The map as an RGB float image, colour = (n + 1)/2, rows top to bottom (what a file of it holds).
+inline std::vector<float> encodeNormalMapRgb(const NormalMap& m) {
+    std::vector<float> px(size_t(m.size) * size_t(m.size) * 3);
+    for (size_t i = 0; i < m.normals.size(); ++i)
+        for (int c = 0; c < 3; ++c) px[i * 3 + size_t(c)] = 0.5f * (m.normals[i][c] + 1.f);
+    return px;
+}
+
 // Writes 'map' encoded as colour = (n + 1)/2 (the convention texture.normal_map decodes), chosen by extension:
 // .png -> 16-bit RGB PNG, .exr -> 32-bit float RGB EXR (also .tif/.tiff -> 16-bit). Throws NormalMapError.
 void writeNormalMap(const NormalMap& map, const std::string& path);

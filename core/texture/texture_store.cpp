@@ -4,6 +4,7 @@
 
 #include "core/color/color_config.h"
 #include "core/io/image_io.h"
+#include "core/texture/normal_map_gen.h"
 
 #include <OpenImageIO/hash.h>
 #include <OpenImageIO/imagebuf.h>
@@ -149,8 +150,10 @@ TextureStore::~TextureStore() = default;
 TextureHandle TextureStore::load(const std::string& path, const std::string& colorspace) {
     auto& I = *impl_;
     std::error_code ec;
-    if (!fs::is_regular_file(path, ec)) throw TextureError("texture file not found: '" + path + "'");
-    std::string absPath = fs::weakly_canonical(fs::absolute(path, ec), ec).string();
+    // 'generate:<kind>:<size>:<seed>' (normal_map_gen.h): a procedural normal map instead of a file, raw data.
+    const bool generated = isGeneratedNormalMapName(path);
+    if (!generated && !fs::is_regular_file(path, ec)) throw TextureError("texture file not found: '" + path + "'");
+    std::string absPath = generated ? path : fs::weakly_canonical(fs::absolute(path, ec), ec).string();
     if (absPath.empty()) absPath = path;
 
     const bool autoSpace = colorspace.empty() || colorspace == "auto";
@@ -172,18 +175,36 @@ TextureHandle TextureStore::load(const std::string& path, const std::string& col
 
     // ---- read the file (content hash + pixels); heavy work happens without the lock ----
     std::string bytes;
-    {
-        std::ifstream f(path, std::ios::binary);
-        std::ostringstream ss;
-        ss << f.rdbuf();
-        if (!f.good() && !f.eof()) throw TextureError("cannot read texture '" + path + "'");
-        bytes = ss.str();
+    OIIO::ImageBuf src;
+    if (generated) {
+        // The name is the content (the generator is deterministic), the pixels come from memory.
+        NormalMap map;
+        try {
+            map = generateNormalMapFromName(path);
+        } catch (const std::exception& err) {
+            throw TextureError(err.what());
+        }
+        bytes = path;
+        OIIO::ImageSpec gen(map.size, map.size, 3, OIIO::TypeDesc::FLOAT);
+        gen.attribute("oiio:ColorSpace", "Raw");
+        src.reset(gen);
+        const std::vector<float> px = encodeNormalMapRgb(map);
+        src.set_pixels(OIIO::ROI(0, map.size, 0, map.size, 0, 1, 0, 3), OIIO::TypeDesc::FLOAT, px.data());
+        if (autoSpace) declared = "raw";
+    } else {
+        {
+            std::ifstream f(path, std::ios::binary);
+            std::ostringstream ss;
+            ss << f.rdbuf();
+            if (!f.good() && !f.eof()) throw TextureError("cannot read texture '" + path + "'");
+            bytes = ss.str();
+        }
+        OIIO::ImageSpec readConfig;
+        readConfig.attribute("oiio:UnassociatedAlpha", 1);  // keep straight alpha: colour is converted unpremultiplied
+        src.reset(path, 0, 0, nullptr, &readConfig);
+        if (!src.read(0, 0, true, OIIO::TypeDesc::FLOAT))
+            throw TextureError("cannot read texture '" + path + "': " + src.geterror());
     }
-    OIIO::ImageSpec readConfig;
-    readConfig.attribute("oiio:UnassociatedAlpha", 1);  // keep straight alpha: colour is converted unpremultiplied
-    OIIO::ImageBuf src(path, 0, 0, nullptr, &readConfig);
-    if (!src.read(0, 0, true, OIIO::TypeDesc::FLOAT))
-        throw TextureError("cannot read texture '" + path + "': " + src.geterror());
     const OIIO::ImageSpec& spec = src.spec();
     auto e = std::make_unique<Entry>();
     e->path = path;
@@ -193,7 +214,7 @@ TextureHandle TextureStore::load(const std::string& path, const std::string& col
     if (e->width <= 0 || e->height <= 0 || e->channels <= 0) throw TextureError("texture '" + path + "' is empty");
     if (spec.depth > 1) throw TextureError("texture '" + path + "': volume textures are not supported");
 
-    if (autoSpace) {
+    if (autoSpace && !generated) {
         // The file's own tag if the config knows it; else 8/16-bit integer = sRGB, float = working space.
         std::string tag = spec.get_string_attribute("oiio:ColorSpace");
         if (!tag.empty() && I.color->hasColorspace(tag))

@@ -14,22 +14,21 @@
 namespace specula::nodes {
 namespace {
 
-// 'generate:<kind>:<size>:<seed>' -> the procedural map encoded as an RGB float image (file row order).
-void generate(const std::string& spec, NormalMapSource& out) {
-    const std::string rest = spec.substr(9);
-    const size_t a = rest.find(':'), b = a == std::string::npos ? a : rest.find(':', a + 1);
-    if (b == std::string::npos) throw std::runtime_error("expected generate:<kind>:<size>:<seed>");
-    const NormalMap m = generateNormalMap(parseNormalMapKind(rest.substr(0, a)), std::stoi(rest.substr(a + 1, b - a - 1)),
-                                          std::stoull(rest.substr(b + 1)));
+// A generated map encoded as an RGB float image in file row order, without a texture store (codegen-only loads).
+void generate(const std::string& name, NormalMapSource& out) {
+    const NormalMap m = generateNormalMapFromName(name);
     out.width = out.height = m.size;
     out.channels = 3;
-    out.encoded.resize(size_t(m.size) * m.size * 3);
-    for (int y = 0; y < m.size; ++y)
-        for (int x = 0; x < m.size; ++x)
-            for (int c = 0; c < 3; ++c) out.encoded[(size_t(y) * m.size + x) * 3 + c] = 0.5f * (m.at(x, y)[c] + 1.f);
+    out.encoded = encodeNormalMapRgb(m);
 }
 
 }  // namespace
+
+std::string resolveTexturePath(const graph::PrepareContext& pc, const std::string& file) {
+    if (isGeneratedNormalMapName(file) || !pc.load || pc.load->baseDir.empty()) return file;
+    std::filesystem::path p(file);
+    return p.is_relative() ? (std::filesystem::path(pc.load->baseDir) / p).string() : file;
+}
 
 NormalMapSource loadNormalMapSource(const graph::PrepareContext& pc, const std::string& port, const char* node,
                                     bool directx, const NormalMapChecks& checks) {
@@ -39,15 +38,13 @@ NormalMapSource loadNormalMapSource(const graph::PrepareContext& pc, const std::
     src.name = file;
     const std::string what = std::string(node) + ": normal map '" + file + "'";
     try {
-        if (file.rfind("generate:", 0) == 0) {
+        if (isGeneratedNormalMapName(file)) {
             generate(file, src);
         } else {
             if (!pc.load || !pc.load->textures)
                 throw InputError(pointer, std::string(node) + " needs a texture store (none was given to the graph loader)");
-            std::filesystem::path p(file);
-            if (p.is_relative() && !pc.load->baseDir.empty()) p = std::filesystem::path(pc.load->baseDir) / p;
             TextureStore& store = *pc.load->textures;
-            const TextureHandle h = store.load(p.string(), "raw");
+            const TextureHandle h = store.load(resolveTexturePath(pc, file), "raw");
             src.width = store.width(h);
             src.height = store.height(h);
             src.channels = store.channels(h);

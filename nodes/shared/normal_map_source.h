@@ -20,6 +20,10 @@ struct NormalMapSource {
     std::string name;            // the file as written in the material (for messages)
 };
 
+// A texture input's path as the texture store should open it: relative paths against the scene file's folder;
+// absolute paths and generated maps ('generate:<kind>:<size>:<seed>', core/texture/normal_map_gen.h) unchanged.
+std::string resolveTexturePath(const graph::PrepareContext& pc, const std::string& file);
+
 struct NormalMapChecks {
     // Reject maps whose decoded vectors are not unit length (a colour image or a height map given by mistake): more
     // than maxBadFraction of the texels off by more than lengthTolerance. 8-bit quantisation alone stays below 0.01.
@@ -30,7 +34,7 @@ struct NormalMapChecks {
     bool normalise = false;
 };
 
-// Reads the normal map named by the string input 'port' of the node being prepared. Every failure is an InputError
+// Reads the normal map named by the string input 'port' of the node being prepared (a file or a generated map). Every failure is an InputError
 // at the port's JSON pointer naming the file: no texture store, unreadable file, a channel count other than 2 (RG,
 // z reconstructed), 3 or 4, and the unit-length check. 'node' is the node type for the messages.
 NormalMapSource loadNormalMapSource(const graph::PrepareContext& pc, const std::string& port, const char* node,

@@ -29,16 +29,19 @@ def overrides_args(spp=None, resolution=None, seed=None, shift_px=None, threads=
 
 
 def rebase_files(scene, src_dir, dst_dir=None):
-    """A copy of 'scene' whose relative 'file' keys (texture and normal-map inputs, mesh shapes, environment maps),
-    written relative to src_dir, are made absolute (dst_dir None) or relative to dst_dir, so that the JSON can be
-    written anywhere."""
+    """A copy of 'scene' whose relative 'file' and 'normal_map' keys (texture and normal-map inputs, mesh shapes,
+    environment maps), written relative to src_dir, are made absolute (dst_dir None) or relative to dst_dir, so that
+    the JSON can be written anywhere."""
     s = copy.deepcopy(scene)
 
     def rebase(obj):
-        f = obj.get("file")
-        if isinstance(f, str) and not os.path.isabs(f):
-            p = os.path.normpath(os.path.join(src_dir, f))
-            obj["file"] = p if dst_dir is None else os.path.relpath(p, dst_dir)
+        # 'normal_map': the file input of bsdf.ltc_normal_map and bsdf.glint_pndf. Generated maps
+        # ('generate:<kind>:<size>:<seed>') are names, not paths.
+        for key in ("file", "normal_map"):
+            f = obj.get(key)
+            if isinstance(f, str) and not os.path.isabs(f) and not f.startswith("generate:"):
+                p = os.path.normpath(os.path.join(src_dir, f))
+                obj[key] = p if dst_dir is None else os.path.relpath(p, dst_dir)
 
     for m in s.get("materials", {}).values():
         for n in m.get("nodes", {}).values():

@@ -1,6 +1,8 @@
 // texture.image: an image file (declared colorspace, converted to the working space by TextureStore)
 // filtered with the ray-differential footprint (duvdx, duvdy); GLSL: sampler2D + textureGrad.
 #include "nodes/node_common.h"
+
+#include "nodes/shared/normal_map_source.h"
 #include "nodes/shared/texture_ports.h"
 
 #include "core/graph/graph_material.h"
@@ -18,7 +20,8 @@ struct Params {
     float uvScale;
 };
 const NodeParams<Params> kParams = NodeParams<Params>()
-    .str("file", "image path (relative to the scene file)")
+    .str("file", "image path (relative to the scene file), or 'generate:<kind>:<size>:<seed>' for a generated normal "
+                 "map (core/texture/normal_map_gen.h; use colorspace raw)")
     .str("colorspace", "colorspace of the file (OCIO name/alias, or \"raw\" for data)")
     .choice("wrap", &Params::wrap, "wrap mode (sampler state)").uniform()
     .v2("uv", &Params::uv, Vec2(0.f), "texture coordinates").range(-1.f, 2.f).bind(GeomBinding::UV)
@@ -43,15 +46,14 @@ std::shared_ptr<const void> prepare(const PrepareContext& pc) {
     const std::string& cs = pc.str("colorspace");
     if (!pc.load || !pc.load->textures)
         throw InputError(pc.pointer("file"), "texture.image needs a texture store (none was given to the graph loader)");
-    std::filesystem::path p(file);
-    if (p.is_relative() && !pc.load->baseDir.empty()) p = std::filesystem::path(pc.load->baseDir) / p;
+    const std::string path = resolveTexturePath(pc, file);
     auto d = std::make_shared<ImageData>();
     d->store = pc.load->textures;
     static const TextureWrap wraps[] = {TextureWrap::Repeat, TextureWrap::Clamp, TextureWrap::Mirror};
     const std::string& w = pc.str("wrap");
     d->wrap = w == "clamp" ? wraps[1] : w == "mirror" ? wraps[2] : wraps[0];
     try {
-        d->handle = pc.load->textures->load(p.string(), cs);
+        d->handle = pc.load->textures->load(path, cs);
     } catch (const std::exception& e) {
         throw InputError(pc.pointer("file"), std::string("cannot load texture: ") + e.what());
     }

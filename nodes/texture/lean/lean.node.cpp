@@ -3,6 +3,8 @@
 // mean slope, (σx, σy, ρ) and the slope covariance Σ for bsdf.beckmann_lean, bsdf.ggx_filtered and bsdf.glint.
 #include "nodes/node_common.h"
 
+#include "nodes/shared/normal_map_source.h"
+
 #include "core/graph/closure_util.h"
 #include "nodes/shared/lean_resource.h"
 #include "nodes/shared/texture_ports.h"
@@ -42,7 +44,8 @@ struct Params {
     float sign, uvScale;
 };
 const NodeParams<Params> kParams = NodeParams<Params>()
-    .str("file", "tangent-space normal map, colour = (n + 1)/2, read as raw data (relative to the scene file)")
+    .str("file", "tangent-space normal map, colour = (n + 1)/2, read as raw data (relative to the scene file), or "
+                 "'generate:<kind>:<size>:<seed>' for a generated map")
     .choice("convention", &Params::convention, "green channel: opengl = +Y up, directx = +Y down")
     .choice("filter", &Params::filter,
             "footprint filter: anisotropic probes along the major axis, isotropic trilinear, or none "
@@ -71,12 +74,11 @@ std::shared_ptr<const void> prepare(const PrepareContext& pc) {
     const std::string& file = pc.str("file");
     if (!pc.load || !pc.load->textures)
         throw InputError(pc.pointer("file"), "texture.lean needs a texture store (none was given to the graph loader)");
-    std::filesystem::path p(file);
-    if (p.is_relative() && !pc.load->baseDir.empty()) p = std::filesystem::path(pc.load->baseDir) / p;
+    const std::string path = resolveTexturePath(pc, file);
     auto d = std::make_shared<LeanData>();
     try {
         TextureStore& store = *pc.load->textures;
-        TextureHandle h = store.load(p.string(), "raw");  // normal maps are data: no colour conversion
+        TextureHandle h = store.load(path, "raw");  // normal maps are data: no colour conversion
         if (store.channels(h) < 2)
             throw InputError(pc.pointer("file"), "texture.lean: '" + file + "' has " + std::to_string(store.channels(h)) +
                                                  " channel(s); a tangent-space normal map needs 2 or 3");
