@@ -32,9 +32,9 @@ double triangleNormalArea(const ManifoldTriangle& t);
 
 // The kernel mass of a triangle's texel area, g_T = ∫_{x(T)} K(x - x_q) dx, the weight projectedArea gives Π_T/|J_T|.
 // Triangles inside the kernel support: box/disk exact; the Gaussian by the edge-midpoint rule (exact up to
-// quadratics) on n² sub-triangles, n = ceil(4/σ_min) (its std is σ/3). Triangles cut by the support boundary are
-// clipped to the box, then the box kernel is exact, the Gaussian uses the same rule on the clipped polygon's fan and
-// the disk counts the centroids of n² sub-triangles inside the ellipse, n = max(8, ceil(16/σ_min)).
+// quadratics) on n² sub-triangles, n = ceil(3/σ_min) (its std is σ/3). Triangles cut by the support boundary: the
+// box kernel is exact on the triangle clipped to the box, the Gaussian uses the same rule on the clipped polygon's
+// fan, and the disk is exact (triangle ∩ ellipse area by the polygon-circle formula, after scaling to a unit circle).
 double triangleKernelMass(const ManifoldTriangle& t, const Footprint& fp);
 
 struct ProjectedAreaOptions {
@@ -42,6 +42,8 @@ struct ProjectedAreaOptions {
     // only one cell per k x k block is integrated, k = ceil(sqrt(cells/maxCells)), picked by a deterministic hash of
     // the block (stratified sampling, which avoids aliasing with periodic maps that a fixed stride would have).
     // Numerator and normaliser use the same cells, so Ā(0) = 1 and the flat-map Ā = cosθ stay exact.
+    // Cost of the exact sum is ~200 ns per cell (σ = 64: 129² cells, ~3.6 ms); maxCells = 1024 bounds a call to
+    // ~0.15 ms at a relative error of ~5e-4 on a bumpy map (test SubsamplingAccuracyAndCost).
     int maxCells = 0;
 };
 
