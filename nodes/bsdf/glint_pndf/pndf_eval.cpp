@@ -126,7 +126,8 @@ double evalPndfBruteForce(const PndfManifold& manifold, const Footprint& fp, con
 
 bool clusterAccepted(const PndfManifold& manifold, int level, int row, int col, const Footprint& fp,
                      double clusterThreshold) {
-    // Spec §3.2 criterion r < ε_c σ_u σ_v; with ε_c = 0 nothing passes (r >= 0) and the result is exact.
+    // Spec §3.2 criterion r < ε_c σ_u σ_v with r the true float64 fit error; with ε_c = 0 nothing passes (r >= 0)
+    // and the result is exact (invariant 5).
     if (level < 1 || level > std::min(manifold.clusterLevelCount(), kMaxQueryClusterLevel)) return false;
     return manifold.cluster(level, row, col).residual < clusterThreshold * fp.sigmaU * fp.sigmaV;
 }
@@ -152,14 +153,17 @@ double evalPndfHierarchy(const PndfManifold& manifold, const Footprint& fp, cons
         const Node n = stack.back();
         stack.pop_back();
         if (stats) ++stats->nodesVisited;
+        if (n.level == 0) {
+            // Level-0 bounds are not stored (issue 12 item 2); the conservative corner test culls like them.
+            if (!manifold.cellMayContain(n.row, n.col, s.x, s.y)) continue;
+            if (disk && rectMissesEllipse(fp, n.col, n.row, n.col + 1.0, n.row + 1.0)) continue;
+            sum += cellContribution(manifold, n.row, n.col, s, fp, stats);
+            continue;
+        }
         if (!manifold.bounds(n.level, n.row, n.col).contains(s.x, s.y)) continue;
         if (disk) {
             const double size = double(1 << n.level);
             if (rectMissesEllipse(fp, n.col * size, n.row * size, (n.col + 1) * size, (n.row + 1) * size)) continue;
-        }
-        if (n.level == 0) {
-            sum += cellContribution(manifold, n.row, n.col, s, fp, stats);
-            continue;
         }
         if (clusterAccepted(manifold, n.level, n.row, n.col, fp, clusterThreshold)) {
             ManifoldTriangle tris[2];
