@@ -70,7 +70,8 @@ TEST(PndfCache, SerialisationRoundTripIsBitIdentical) {
     std::uniform_real_distribution<double> u01(0, 1);
     for (int q = 0; q < 200; ++q) {
         Footprint fp{u01(rng) * n, u01(rng) * n, 1 + 20 * u01(rng), 1 + 20 * u01(rng), FootprintKernel(q % 3)};
-        Vec2d s = manifoldNormalAt(m, fp.centreX + (u01(rng) - 0.5) * fp.sigmaU, fp.centreY + (u01(rng) - 0.5) * fp.sigmaV);
+        Vec2d s = manifoldNormalAt(m, fp.centreX + (u01(rng) - 0.5) * fp.sigmaU,
+                                   fp.centreY + (u01(rng) - 0.5) * fp.sigmaV);
         EXPECT_EQ(evalPndfHierarchy(m, fp, s), evalPndfHierarchy(*back, fp, s));
         EXPECT_EQ(evalPndfHierarchy(m, fp, s, nullptr, 1e-2), evalPndfHierarchy(*back, fp, s, nullptr, 1e-2));
     }
@@ -125,7 +126,8 @@ TEST(PndfCache, DiskCacheWritesReadsAndSharesInProcess) {
     EXPECT_FALSE(pndfCacheKey(normals, n, n, 2e-6) == pndfCacheKey(normals, n, n, kDefaultJacobianClamp));
     std::vector<Vec3> other = normals;
     other[100].x += 1e-6f;
-    EXPECT_FALSE(pndfCacheKey(other, n, n, kDefaultJacobianClamp) == pndfCacheKey(normals, n, n, kDefaultJacobianClamp));
+    EXPECT_FALSE(pndfCacheKey(other, n, n, kDefaultJacobianClamp) ==
+                 pndfCacheKey(normals, n, n, kDefaultJacobianClamp));
     fs::remove_all(dir);
 }
 

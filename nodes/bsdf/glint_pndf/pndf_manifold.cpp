@@ -91,7 +91,6 @@ void PndfManifold::makeTriangles(const Vec2d& a, const Vec2d& b, const Vec2d& d,
     lo.xStep1 = {-size, 0};
     lo.xStep2 = {0, -size};
 
-    const Equilateral eq(jacobianClamp_);
     for (int t = 0; t < 2; ++t) {
         ManifoldTriangle& tri = out[t];
         tri.xArea = size * size;
@@ -99,6 +98,7 @@ void PndfManifold::makeTriangles(const Vec2d& a, const Vec2d& b, const Vec2d& d,
         // The clamp applies in the triangle's own parameter units: texels for cells, node-local for clusters.
         tri.replaced = !(std::abs(tri.jacobian) >= jacobianClamp_);
         if (!tri.replaced) continue;
+        const Equilateral eq(jacobianClamp_);  // only here: its two square roots are per replaced triangle
         // Spec §2.3: replace by E centred on b so that 1/|J| is clamped to 1/ε_J while the x parametrisation (and
         // so the kernel mass of the half-cell) is unchanged.
         tri.sOrigin = {b.x, b.y + eq.R};

@@ -7,6 +7,8 @@
 // normal-triangle area, and the replacement of near-singular triangles; Fig. 5a: the min-max hierarchy.
 // Cluster hierarchy (spec §3.2, paper Eq. 7): least-squares cluster corner normals per 2^ℓ block with weights
 // 1/max(|J_T|, ε_J) and the true fit residual in float64 (the spec's recommended fix), levels 1..5.
+// Memory (issue 12 item 2): level-0 bounds are recomputed, not stored; at 1024² the structures are 26.55 MB (normals
+// 8.39, bounds levels 1..8 5.59, clusters levels 1..5 12.57) against the paper's 34 MB.
 #pragma once
 
 #include "core/math/math.h"
