@@ -61,8 +61,8 @@
 // The exact hierarchy is 24x faster than brute force on bumps at 128 texels, but only 1.1-1.4x on brushed and
 // scratches, whose cells' normal bounds overlap most of the footprint's normals (28% / 19% of the cells tested).
 // Build (brushed): 256² 29.5 ms, 1024² 477 ms, 26.55 MB at 1024² (normals 8.39, bounds levels 1..8 5.59 = 4.19 +
-// 1.05 + 0.26 + 0.07 + ..., clusters levels 1..5 12.57 = 9.44 + 2.36 + 0.59 + 0.15 + 0.04). Disk cache at 1024²: build + write
-// 512 ms, load (checksum + deserialize) 13.7 ms, 26.55 MB file.
+// 1.05 + 0.26 + 0.07 + ..., clusters levels 1..5 12.57 = 9.44 + 2.36 + 0.59 + 0.15 + 0.04). Disk cache at 1024²:
+// build + write 512 ms, load (checksum + deserialize) 13.7 ms, 26.55 MB file.
 #include "core/texture/normal_map_gen.h"
 #include "nodes/bsdf/glint_pndf/pndf_cache.h"
 #include "nodes/bsdf/glint_pndf/pndf_eval.h"
