@@ -56,6 +56,22 @@ TEST(Pndf, ManifoldBuildAndBounds) {
     std::printf("[pndf] 32^2 plateau map: %d of %d triangles replaced, %d negatively oriented; %zu bytes\n", replaced,
                 2 * n * n, flipped, m.memoryBytes());
     EXPECT_GT(replaced, 100);
+    // Level-0 bounds are recomputed (not stored): the traversal's cheap test cellMayContain accepts all of them.
+    for (int r = -1; r <= n; ++r)
+        for (int c = -1; c <= n; ++c) {
+            const NormalBounds b = m.bounds(0, r, c);
+            for (double sx : {double(b.minX), double(b.maxX)})
+                for (double sy : {double(b.minY), double(b.maxY)}) EXPECT_TRUE(m.cellMayContain(r, c, sx, sy));
+            // ...and stays tight: beyond the 4 corners (and b's equilateral triangle) it rejects.
+            const double cornerMaxX = std::max({m.vertex(r, c).x, m.vertex(r, c + 1).x, m.vertex(r + 1, c).x,
+                                                m.vertex(r + 1, c + 1).x});
+            EXPECT_FALSE(m.cellMayContain(r, c, cornerMaxX + 0.01, b.maxY));
+        }
+    const PndfManifold::MemoryBreakdown mb = m.memoryBreakdown();
+    EXPECT_EQ(mb.normals, size_t(n) * n * 8);
+    EXPECT_EQ(mb.bounds[0], 0u);
+    EXPECT_EQ(mb.bounds[1], size_t(n / 2) * (n / 2) * 16);
+    EXPECT_EQ(mb.clusters[1], size_t(n / 2) * (n / 2) * 36);
     // Periodic wrap: unwrapped indices see the same vertices.
     EXPECT_EQ(m.vertex(-1, -1), m.vertex(n - 1, n - 1));
     EXPECT_EQ(m.vertex(n, 2 * n + 3), m.vertex(0, 3));
@@ -343,8 +359,9 @@ TEST(Pndf, ClusterCutErrorAndCostAreMonotoneInThreshold) {
                                    fp.centreY + (u01(rng) * 2 - 1) * fp.sigmaV);
         qs.push_back({fp, s, evalPndfBruteForce(m, fp, s)});
     }
-    double prevErr = -1, prevWork = 1e300;
-    for (double eps : {0.0, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1}) {
+    double prevErr = -1, prevWork = 1e300, errAtDefault = -1;
+    static_assert(kDefaultClusterThreshold > 1e-6 && kDefaultClusterThreshold < 1e-4, "keep the sweep ordered");
+    for (double eps : {0.0, 1e-6, kDefaultClusterThreshold, 1e-4, 1e-3, 1e-2, 1e-1, 1.0}) {
         double errSum = 0, refSum = 0;
         uint64_t work = 0, clusters = 0;
         for (const Q& q : qs) {
@@ -361,11 +378,16 @@ TEST(Pndf, ClusterCutErrorAndCostAreMonotoneInThreshold) {
         if (eps == 0) {
             EXPECT_LT(err, 1e-12);
         }
+        if (eps == kDefaultClusterThreshold) errAtDefault = err;
         EXPECT_GE(err, prevErr * 0.95);  // monotone up to query noise
         EXPECT_LE(double(work), prevWork);
         prevErr = err;
         prevWork = double(work);
     }
+    // The calibrated default (pndf_eval.h) keeps D at the paper's Tab. 3 error level on this map too.
+    std::printf("[pndf] default eps_c=%.0e: relative L1 error of D %.4f\n", kDefaultClusterThreshold, errAtDefault);
+    EXPECT_GT(errAtDefault, 0.0);  // clusters are used at all
+    EXPECT_LT(errAtDefault, 0.01);
     // Normalisation of the clustered D_P with every reachable node clustered.
     Footprint fp{50.5, 70.25, 12, 12, FootprintKernel::Box};
     NormalBounds b = footprintNormalBounds(m, fp);
@@ -385,4 +407,22 @@ TEST(Pndf, ClusterCutErrorAndCostAreMonotoneInThreshold) {
     integral *= hx * hy;
     std::printf("[pndf] fully clustered D_P (box, sigma 12): ∫D = %.5f\n", integral);
     EXPECT_NEAR(integral, 1.0, 0.01);
+}
+
+TEST(Pndf, StructuresAt1024AreWithinTheIssueBudget) {
+    // Issue 12 item 2: <= 34 MB of structures and <= 20 s of build for a 1024² map. Level-0 bounds are recomputed
+    // (pndf_manifold.h), which leaves normals 8.39 MB + bounds 5.59 MB + clusters (levels 1..5) 12.58 MB.
+    const int n = 1024;
+    const auto t0 = std::chrono::steady_clock::now();
+    PndfManifold m(sinusoidMap(n, 51, 40, 0.3), n, n);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const PndfManifold::MemoryBreakdown mb = m.memoryBreakdown();
+    size_t bounds = 0, clusters = 0;
+    for (size_t b : mb.bounds) bounds += b;
+    for (size_t b : mb.clusters) clusters += b;
+    std::printf("[pndf] 1024^2: %.2f MB (normals %.2f, bounds %.2f, clusters %.2f), built in %.2f s\n",
+                m.memoryBytes() / 1e6, mb.normals / 1e6, bounds / 1e6, clusters / 1e6, seconds);
+    EXPECT_EQ(m.memoryBytes(), mb.normals + bounds + clusters);
+    EXPECT_LE(m.memoryBytes(), size_t(34e6));
+    EXPECT_LT(seconds, 20.0);
 }

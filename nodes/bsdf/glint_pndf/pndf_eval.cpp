@@ -126,7 +126,8 @@ double evalPndfBruteForce(const PndfManifold& manifold, const Footprint& fp, con
 
 bool clusterAccepted(const PndfManifold& manifold, int level, int row, int col, const Footprint& fp,
                      double clusterThreshold) {
-    // Spec §3.2 criterion r < ε_c σ_u σ_v; with ε_c = 0 nothing passes (r >= 0) and the result is exact.
+    // Spec §3.2 criterion r < ε_c σ_u σ_v with r the true float64 fit error; with ε_c = 0 nothing passes (r >= 0)
+    // and the result is exact (invariant 5).
     if (level < 1 || level > std::min(manifold.clusterLevelCount(), kMaxQueryClusterLevel)) return false;
     return manifold.cluster(level, row, col).residual < clusterThreshold * fp.sigmaU * fp.sigmaV;
 }
@@ -143,27 +144,27 @@ double evalPndfHierarchy(const PndfManifold& manifold, const Footprint& fp, cons
     const int l0 = entryLevel(manifold, fp);
     IndexRange ranges[PndfManifold::kMaxLevel + 1];  // the footprint's range per level, computed once per query
     for (int l = 0; l <= l0; ++l) ranges[l] = footprintRange(fp, l);
-    const IndexRange& top = ranges[l0];
-    for (int row = top.rowLo; row <= top.rowHi; ++row)
-        for (int col = top.colLo; col <= top.colHi; ++col) stack.push_back({l0, row, col});
     const bool disk = fp.kernel == FootprintKernel::Disk;
     double sum = 0.0;
-    while (!stack.empty()) {
-        const Node n = stack.back();
-        stack.pop_back();
+    // Each node is tested when it is reached (bounds, then the disk's ellipse): a level-0 cell that passes is
+    // summed at once and an accepted cluster too, so only inner nodes to refine go through the stack.
+    auto visit = [&](int level, int row, int col) {
         if (stats) ++stats->nodesVisited;
-        if (!manifold.bounds(n.level, n.row, n.col).contains(s.x, s.y)) continue;
+        if (level == 0) {
+            // Level-0 bounds are not stored (issue 12 item 2); the conservative corner test culls like them.
+            if (!manifold.cellMayContain(row, col, s.x, s.y)) return;
+            if (disk && rectMissesEllipse(fp, col, row, col + 1.0, row + 1.0)) return;
+            sum += cellContribution(manifold, row, col, s, fp, stats);
+            return;
+        }
+        if (!manifold.bounds(level, row, col).contains(s.x, s.y)) return;
         if (disk) {
-            const double size = double(1 << n.level);
-            if (rectMissesEllipse(fp, n.col * size, n.row * size, (n.col + 1) * size, (n.row + 1) * size)) continue;
+            const double size = double(1 << level);
+            if (rectMissesEllipse(fp, col * size, row * size, (col + 1) * size, (row + 1) * size)) return;
         }
-        if (n.level == 0) {
-            sum += cellContribution(manifold, n.row, n.col, s, fp, stats);
-            continue;
-        }
-        if (clusterAccepted(manifold, n.level, n.row, n.col, fp, clusterThreshold)) {
+        if (clusterAccepted(manifold, level, row, col, fp, clusterThreshold)) {
             ManifoldTriangle tris[2];
-            manifold.clusterTriangles(n.level, n.row, n.col, tris);
+            manifold.clusterTriangles(level, row, col, tris);
             for (const ManifoldTriangle& t : tris) {
                 double c = triangleContribution(t, s, fp);
                 if (c > 0.0) {
@@ -172,15 +173,23 @@ double evalPndfHierarchy(const PndfManifold& manifold, const Footprint& fp, cons
                 }
             }
             if (stats) ++stats->clustersUsed;
-            continue;
+            return;
         }
+        stack.push_back({level, row, col});
+    };
+    const IndexRange& top = ranges[l0];
+    for (int row = top.rowLo; row <= top.rowHi; ++row)
+        for (int col = top.colLo; col <= top.colHi; ++col) visit(l0, row, col);
+    while (!stack.empty()) {
+        const Node n = stack.back();
+        stack.pop_back();
         // Children, clipped again to the footprint's range at their level (spec §3.1).
         const int cl = n.level - 1;
         const IndexRange& r = ranges[cl];
         const int rowLo = std::max(2 * n.row, r.rowLo), rowHi = std::min(2 * n.row + 1, r.rowHi);
         const int colLo = std::max(2 * n.col, r.colLo), colHi = std::min(2 * n.col + 1, r.colHi);
         for (int row = rowLo; row <= rowHi; ++row)
-            for (int col = colLo; col <= colHi; ++col) stack.push_back({cl, row, col});
+            for (int col = colLo; col <= colHi; ++col) visit(cl, row, col);
     }
     return sum;
 }

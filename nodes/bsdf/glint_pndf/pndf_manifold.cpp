@@ -2,6 +2,7 @@
 #include "nodes/bsdf/glint_pndf/pndf_manifold.h"
 
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -46,6 +47,7 @@ PndfManifold::PndfManifold(const std::vector<Vec3>& normals, int width, int heig
         throw std::invalid_argument("PndfManifold: " + std::to_string(normals.size()) + " normals for a " +
                                     std::to_string(width) + "x" + std::to_string(height) + " map");
     if (!(jacobianClamp > 0)) throw std::invalid_argument("PndfManifold: the Jacobian clamp must be > 0");
+    equilateralRadius_ = Equilateral(jacobianClamp).R;
     projected_.resize(normals.size());
     for (size_t i = 0; i < normals.size(); ++i) {
         Vec3 n = normals[i];
@@ -89,7 +91,6 @@ void PndfManifold::makeTriangles(const Vec2d& a, const Vec2d& b, const Vec2d& d,
     lo.xStep1 = {-size, 0};
     lo.xStep2 = {0, -size};
 
-    const Equilateral eq(jacobianClamp_);
     for (int t = 0; t < 2; ++t) {
         ManifoldTriangle& tri = out[t];
         tri.xArea = size * size;
@@ -97,6 +98,7 @@ void PndfManifold::makeTriangles(const Vec2d& a, const Vec2d& b, const Vec2d& d,
         // The clamp applies in the triangle's own parameter units: texels for cells, node-local for clusters.
         tri.replaced = !(std::abs(tri.jacobian) >= jacobianClamp_);
         if (!tri.replaced) continue;
+        const Equilateral eq(jacobianClamp_);  // only here: its two square roots are per replaced triangle
         // Spec §2.3: replace by E centred on b so that 1/|J| is clamped to 1/ε_J while the x parametrisation (and
         // so the kernel mass of the half-cell) is unchanged.
         tri.sOrigin = {b.x, b.y + eq.R};
@@ -214,44 +216,42 @@ void PndfManifold::buildClusters() {
     }
 }
 
+NormalBounds PndfManifold::cellBounds(int r, int c) const {
+    const float inf = std::numeric_limits<float>::infinity();
+    ManifoldTriangle tris[2];
+    cellTriangles(r, c, tris);
+    NormalBounds nb{inf, inf, -inf, -inf};
+    // The bounds cover exactly the vertices the hit test uses: the original corners of an unreplaced triangle, the
+    // equilateral vertices of a replaced one (spec §3.1 "plus any equilateral replacement vertices"); a replaced
+    // triangle's own corners are not needed since nothing can hit them there.
+    for (const ManifoldTriangle& t : tris) {
+        growBounds(nb, t.sOrigin.x, t.sOrigin.y);
+        growBounds(nb, t.sOrigin.x + t.sEdge1.x, t.sOrigin.y + t.sEdge1.y);
+        growBounds(nb, t.sOrigin.x + t.sEdge2.x, t.sOrigin.y + t.sEdge2.y);
+    }
+    // Round outward by one float ulp: the replacement vertices are computed in double and rounded, and a query on
+    // a bound must never be culled when the double hit test would accept it.
+    nb.minX = std::nextafter(nb.minX, -inf);
+    nb.minY = std::nextafter(nb.minY, -inf);
+    nb.maxX = std::nextafter(nb.maxX, inf);
+    nb.maxY = std::nextafter(nb.maxY, inf);
+    return nb;
+}
+
 void PndfManifold::buildBounds() {
     levels_.clear();
     const float inf = std::numeric_limits<float>::infinity();
-    std::vector<NormalBounds> level0(static_cast<size_t>(width_) * height_);
-    for (int r = 0; r < height_; ++r) {
-        for (int c = 0; c < width_; ++c) {
-            ManifoldTriangle tris[2];
-            cellTriangles(r, c, tris);
-            NormalBounds nb{inf, inf, -inf, -inf};
-            // The bounds cover exactly the vertices the hit test uses: the original corners of an unreplaced
-            // triangle, the equilateral vertices of a replaced one (spec §3.1 "plus any equilateral replacement
-            // vertices"); a replaced triangle's own corners are not needed since nothing can hit them there.
-            for (const ManifoldTriangle& t : tris) {
-                growBounds(nb, t.sOrigin.x, t.sOrigin.y);
-                growBounds(nb, t.sOrigin.x + t.sEdge1.x, t.sOrigin.y + t.sEdge1.y);
-                growBounds(nb, t.sOrigin.x + t.sEdge2.x, t.sOrigin.y + t.sEdge2.y);
-            }
-            // Round outward by one float ulp: the replacement vertices are computed in double and rounded, and a
-            // query on a bound must never be culled when the double hit test would accept it.
-            nb.minX = std::nextafter(nb.minX, -inf);
-            nb.minY = std::nextafter(nb.minY, -inf);
-            nb.maxX = std::nextafter(nb.maxX, inf);
-            nb.maxY = std::nextafter(nb.maxY, inf);
-            level0[static_cast<size_t>(r) * width_ + c] = nb;
-        }
-    }
-    levels_.push_back(std::move(level0));
+    levels_.emplace_back();  // level 0: recomputed by cellBounds, pooled below into level 1
     for (int l = 1; l <= kMaxLevel; ++l) {
         if ((width_ % (1 << l)) != 0 || (height_ % (1 << l)) != 0) break;
-        const int w = levelWidth(l), h = levelHeight(l), pw = levelWidth(l - 1);
-        const std::vector<NormalBounds>& prev = levels_.back();
+        const int w = levelWidth(l), h = levelHeight(l);
         std::vector<NormalBounds> cur(static_cast<size_t>(w) * h);
         for (int r = 0; r < h; ++r)
             for (int c = 0; c < w; ++c) {
                 NormalBounds nb{inf, inf, -inf, -inf};
                 for (int dr = 0; dr < 2; ++dr)
                     for (int dc = 0; dc < 2; ++dc) {
-                        const NormalBounds& ch = prev[static_cast<size_t>(2 * r + dr) * pw + 2 * c + dc];
+                        const NormalBounds ch = bounds(l - 1, 2 * r + dr, 2 * c + dc);
                         nb.minX = std::min(nb.minX, ch.minX);
                         nb.minY = std::min(nb.minY, ch.minY);
                         nb.maxX = std::max(nb.maxX, ch.maxX);
@@ -279,11 +279,122 @@ void PndfManifold::buildBounds() {
     }
 }
 
+PndfManifold::MemoryBreakdown PndfManifold::memoryBreakdown() const {
+    MemoryBreakdown mb;
+    mb.normals = projected_.size() * sizeof(Vec2);
+    for (size_t l = 0; l < levels_.size(); ++l) mb.bounds[l] = levels_[l].size() * sizeof(NormalBounds);
+    for (size_t l = 0; l < clusters_.size(); ++l) mb.clusters[l + 1] = clusters_[l].size() * sizeof(ClusterNode);
+    return mb;
+}
+
 size_t PndfManifold::memoryBytes() const {
-    size_t bytes = projected_.size() * sizeof(Vec2);
-    for (const auto& l : levels_) bytes += l.size() * sizeof(NormalBounds);
-    for (const auto& l : clusters_) bytes += l.size() * sizeof(ClusterNode);
+    const MemoryBreakdown mb = memoryBreakdown();
+    size_t bytes = mb.normals;
+    for (size_t b : mb.bounds) bytes += b;
+    for (size_t b : mb.clusters) bytes += b;
     return bytes;
+}
+
+namespace {
+
+// Byte image layout (native byte order; every supported target is little-endian): u32 width, u32 height, f64 ε_J,
+// u32 bound level count L, u32 cluster level count K, then float32 arrays: normals (2 per vertex), bound levels
+// 1..L-1 (4 per node), cluster levels 1..K (9 per node). L and K must be what the constructor derives from the
+// dimensions, so a buffer can only describe a manifold the build could have made.
+constexpr size_t kSerialHeader = 4 + 4 + 8 + 4 + 4;
+
+int expectedLevels(int w, int h, int maxLevel, int first) {
+    int n = first;
+    for (int l = 1; l <= maxLevel; ++l) {
+        if ((w % (1 << l)) != 0 || (h % (1 << l)) != 0) break;
+        ++n;
+    }
+    return n;
+}
+
+template <class T>
+void put(std::vector<uint8_t>& out, const T& v) {
+    const uint8_t* p = reinterpret_cast<const uint8_t*>(&v);
+    out.insert(out.end(), p, p + sizeof(T));
+}
+
+template <class T>
+void putArray(std::vector<uint8_t>& out, const std::vector<T>& v) {
+    const uint8_t* p = reinterpret_cast<const uint8_t*>(v.data());
+    out.insert(out.end(), p, p + v.size() * sizeof(T));
+}
+
+}  // namespace
+
+std::vector<uint8_t> PndfManifold::serialize() const {
+    static_assert(sizeof(Vec2) == 8 && sizeof(NormalBounds) == 16 && sizeof(ClusterNode) == 36, "packed floats");
+    std::vector<uint8_t> out;
+    size_t total = kSerialHeader + projected_.size() * sizeof(Vec2);
+    for (const auto& l : levels_) total += l.size() * sizeof(NormalBounds);
+    for (const auto& l : clusters_) total += l.size() * sizeof(ClusterNode);
+    out.reserve(total);
+    put(out, uint32_t(width_));
+    put(out, uint32_t(height_));
+    put(out, jacobianClamp_);
+    put(out, uint32_t(levels_.size()));
+    put(out, uint32_t(clusters_.size()));
+    putArray(out, projected_);
+    for (size_t l = 1; l < levels_.size(); ++l) putArray(out, levels_[l]);
+    for (const auto& l : clusters_) putArray(out, l);
+    return out;
+}
+
+std::shared_ptr<PndfManifold> PndfManifold::deserialize(const uint8_t* data, size_t size) {
+    if (data == nullptr || size < kSerialHeader) return nullptr;
+    uint32_t w, h, nLevels, nClusters;
+    double eps;
+    std::memcpy(&w, data, 4);
+    std::memcpy(&h, data + 4, 4);
+    std::memcpy(&eps, data + 8, 8);
+    std::memcpy(&nLevels, data + 16, 4);
+    std::memcpy(&nClusters, data + 20, 4);
+    // Every size is checked against the buffer before anything is allocated (no allocation sized by bad data).
+    if (w == 0 || h == 0 || w > (1u << 16) || h > (1u << 16) || !(eps > 0) || !std::isfinite(eps)) return nullptr;
+    const int iw = int(w), ih = int(h);
+    if (int(nLevels) != expectedLevels(iw, ih, kMaxLevel, 1)) return nullptr;
+    if (nClusters != 0 && int(nClusters) != expectedLevels(iw, ih, kMaxClusterLevel, 0)) return nullptr;
+    uint64_t need = kSerialHeader + uint64_t(w) * h * sizeof(Vec2);
+    for (uint32_t l = 1; l < nLevels; ++l) need += uint64_t(w >> l) * (h >> l) * sizeof(NormalBounds);
+    for (uint32_t l = 1; l <= nClusters; ++l) need += uint64_t(w >> l) * (h >> l) * sizeof(ClusterNode);
+    if (need != size) return nullptr;
+    std::shared_ptr<PndfManifold> m(new PndfManifold());
+    m->width_ = iw;
+    m->height_ = ih;
+    m->jacobianClamp_ = eps;
+    m->equilateralRadius_ = Equilateral(eps).R;
+    const uint8_t* p = data + kSerialHeader;
+    auto take = [&p](auto& vec, size_t count) {
+        vec.resize(count);
+        std::memcpy(vec.data(), p, count * sizeof(vec[0]));
+        p += count * sizeof(vec[0]);
+    };
+    take(m->projected_, size_t(w) * h);
+    for (const Vec2& v : m->projected_)
+        if (!std::isfinite(v.x) || !std::isfinite(v.y)) return nullptr;
+    m->levels_.resize(nLevels);
+    for (uint32_t l = 1; l < nLevels; ++l) take(m->levels_[l], size_t(w >> l) * (h >> l));
+    m->clusters_.resize(nClusters);
+    for (uint32_t l = 1; l <= nClusters; ++l) take(m->clusters_[l - 1], size_t(w >> l) * (h >> l));
+    return m;
+}
+
+bool PndfManifold::identicalTo(const PndfManifold& o) const {
+    auto same = [](const auto& x, const auto& y) {
+        return x.size() == y.size() && (x.empty() || std::memcmp(x.data(), y.data(), x.size() * sizeof(x[0])) == 0);
+    };
+    if (width_ != o.width_ || height_ != o.height_ || jacobianClamp_ != o.jacobianClamp_) return false;
+    if (!same(projected_, o.projected_) || levels_.size() != o.levels_.size() || clusters_.size() != o.clusters_.size())
+        return false;
+    for (size_t l = 0; l < levels_.size(); ++l)
+        if (!same(levels_[l], o.levels_[l])) return false;
+    for (size_t l = 0; l < clusters_.size(); ++l)
+        if (!same(clusters_[l], o.clusters_[l])) return false;
+    return true;
 }
 
 }  // namespace specula::pndf

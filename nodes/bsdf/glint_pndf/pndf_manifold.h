@@ -7,12 +7,16 @@
 // normal-triangle area, and the replacement of near-singular triangles; Fig. 5a: the min-max hierarchy.
 // Cluster hierarchy (spec §3.2, paper Eq. 7): least-squares cluster corner normals per 2^ℓ block with weights
 // 1/max(|J_T|, ε_J) and the true fit residual in float64 (the spec's recommended fix), levels 1..5.
+// Memory (issue 12 item 2): level-0 bounds are recomputed, not stored; at 1024² the structures are 26.55 MB (normals
+// 8.39, bounds levels 1..8 5.59, clusters levels 1..5 12.57) against the paper's 34 MB.
 #pragma once
 
 #include "core/math/math.h"
 
 #include <cstddef>
+#include <algorithm>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 namespace specula::pndf {
@@ -84,10 +88,32 @@ public:
     int levelCount() const { return static_cast<int>(levels_.size()); }
     int levelWidth(int level) const { return width_ >> level; }
     int levelHeight(int level) const { return height_ >> level; }
-    // Bounds of node (row, col) of a level, row/col unwrapped.
-    const NormalBounds& bounds(int level, int row, int col) const {
+    // Bounds of node (row, col) of a level, row/col unwrapped. Level 0 is not stored (issue 12 item 2: it would be
+    // 16 bytes per texel, half of the structures at 1024²); it is recomputed from the cell's corners exactly as the
+    // build pooled it, so every level >= 1 is still the min/max pool of these values.
+    NormalBounds bounds(int level, int row, int col) const {
+        if (level == 0) return cellBounds(row, col);
         int w = levelWidth(level), h = levelHeight(level);
         return levels_[level][static_cast<size_t>(wrap(row, h)) * w + wrap(col, w)];
+    }
+    // Level-0 bounds of cell (row, col): its two triangles' vertices (the replacement vertices for a replaced one),
+    // rounded outward by one float ulp.
+    NormalBounds cellBounds(int row, int col) const;
+    // Conservative level-0 cull for the traversal (cheaper than cellBounds: no triangle set-up): false only when
+    // s lies outside the AABB of the 4 corners grown to cover the equilateral triangle around b (radius R, spec
+    // §2.3) plus a 1e-6 margin, which contains cellBounds. So culling with it never drops a hit.
+    bool cellMayContain(int row, int col, double sx, double sy) const {
+        const int r0 = wrap(row, height_), r1 = r0 + 1 == height_ ? 0 : r0 + 1;
+        const int c0 = wrap(col, width_), c1 = c0 + 1 == width_ ? 0 : c0 + 1;
+        const Vec2* p0 = &projected_[static_cast<size_t>(r0) * width_];
+        const Vec2* p1 = &projected_[static_cast<size_t>(r1) * width_];
+        const Vec2 a = p0[c0], b = p0[c1], d = p1[c0], e = p1[c1];
+        // b ± pad covers b itself, so b's own coordinates need not enter the corner min/max.
+        const double pad = equilateralRadius_ + 1e-6;
+        const double minX = std::min(std::min(a.x, d.x), e.x), maxX = std::max(std::max(a.x, d.x), e.x);
+        const double minY = std::min(std::min(a.y, d.y), e.y), maxY = std::max(std::max(a.y, d.y), e.y);
+        return sx >= std::min(minX - 1e-6, double(b.x) - pad) && sx <= std::max(maxX + 1e-6, double(b.x) + pad) &&
+               sy >= std::min(minY - 1e-6, double(b.y) - pad) && sy <= std::max(maxY + 1e-6, double(b.y) + pad);
     }
 
     // Cluster levels 1..clusterLevelCount() (block size 2^ℓ texels); 0 when not built. Spec §3.2 builds B = 2..32
@@ -103,8 +129,23 @@ public:
     // texel threshold is ε_J/4^ℓ, spec §2.3).
     void clusterTriangles(int level, int row, int col, ManifoldTriangle out[2]) const;
 
-    // Bytes held by the projected normals and the bound levels (build-memory accounting, issue 12 item 2).
+    // Bytes held by the projected normals, the stored bound levels (1..) and the cluster levels (issue 12 item 2).
     size_t memoryBytes() const;
+    struct MemoryBreakdown {
+        size_t normals = 0;
+        size_t bounds[kMaxLevel + 1] = {};           // per level; level 0 is recomputed, so 0
+        size_t clusters[kMaxClusterLevel + 1] = {};  // per level 1..5
+    };
+    MemoryBreakdown memoryBreakdown() const;
+
+    // Serialisation (issue 12 item 2, the disk cache of pndf_cache.h): a little-endian byte image of everything the
+    // queries read (dimensions, ε_J, normals, bound levels, cluster levels). deserialize checks every size against
+    // the buffer before allocating and returns nullptr for a malformed buffer (never throws on bad data).
+    std::vector<uint8_t> serialize() const;
+    static std::shared_ptr<PndfManifold> deserialize(const uint8_t* data, size_t size);
+    // Bit-identical comparison of two manifolds (every normal, bound and cluster float): the cache round-trip test.
+    bool identicalTo(const PndfManifold& other) const;
+
 
     static int wrap(int i, int n) {
         if (static_cast<unsigned>(i) < static_cast<unsigned>(n)) return i;  // common case: no division
@@ -113,6 +154,7 @@ public:
     }
 
 private:
+    PndfManifold() = default;  // for deserialize
     void buildBounds();
     void buildClusters();
     void makeTriangles(const Vec2d& a, const Vec2d& b, const Vec2d& d, const Vec2d& e, double col0, double row0,
@@ -120,8 +162,9 @@ private:
 
     int width_ = 0, height_ = 0;
     double jacobianClamp_ = kDefaultJacobianClamp;
+    double equilateralRadius_ = 0;                // R of spec §2.3 for jacobianClamp_
     std::vector<Vec2> projected_;                 // s per vertex, float32 (8 bytes/texel as in spec §1)
-    std::vector<std::vector<NormalBounds>> levels_;
+    std::vector<std::vector<NormalBounds>> levels_;  // levels_[0] is empty (recomputed by cellBounds)
     std::vector<std::vector<ClusterNode>> clusters_;  // clusters_[ℓ-1] = level ℓ
 };
 
