@@ -409,6 +409,39 @@ TEST(Pndf, ClusterCutErrorAndCostAreMonotoneInThreshold) {
     EXPECT_NEAR(integral, 1.0, 0.01);
 }
 
+TEST(Pndf, ClusterTestIsKernelWeightedForTheGaussian) {
+    // clusterAccepted (pndf_eval.h): the Gaussian weights r by the node's largest kernel value relative to the peak,
+    // so it accepts every node the uniform (box, spec §3.2) test accepts, the same ones where the node holds x_q, and
+    // more in the kernel's tails.
+    const int n = 128;
+    PndfManifold m(sinusoidMap(n, 31, 10, 0.3), n, n);
+    Footprint g{61.3, 70.8, 24, 18, FootprintKernel::Gaussian}, box = g;
+    box.kernel = FootprintKernel::Box;
+    const double eps = 1e-3;
+    int onlyGaussian = 0, both = 0, centreNodes = 0;
+    for (int l = 1; l <= kMaxQueryClusterLevel; ++l) {
+        const IndexRange r = footprintRange(g, l);
+        for (int row = r.rowLo; row <= r.rowHi; ++row)
+            for (int col = r.colLo; col <= r.colHi; ++col) {
+                const bool a = clusterAccepted(m, l, row, col, g, eps), b = clusterAccepted(m, l, row, col, box, eps);
+                EXPECT_TRUE(a || !b) << l << " " << row << " " << col;
+                const double size = double(1 << l);
+                if (g.centreX >= col * size && g.centreX < (col + 1) * size && g.centreY >= row * size &&
+                    g.centreY < (row + 1) * size) {
+                    EXPECT_EQ(a, b) << "node holding x_q, level " << l;
+                    ++centreNodes;
+                }
+                both += a && b;
+                onlyGaussian += a && !b;
+            }
+    }
+    std::printf("[pndf] kernel-weighted cluster test: %d nodes accepted by both, %d only by the Gaussian's\n", both,
+                onlyGaussian);
+    EXPECT_EQ(centreNodes, kMaxQueryClusterLevel);
+    EXPECT_GT(onlyGaussian, both / 4);
+    EXPECT_FALSE(clusterAccepted(m, 2, 3, 3, g, 0.0));  // ε_c = 0: exact
+}
+
 TEST(Pndf, StructuresAt1024AreWithinTheIssueBudget) {
     // Issue 12 item 2: <= 34 MB of structures and <= 20 s of build for a 1024² map. Level-0 bounds are recomputed
     // (pndf_manifold.h), which leaves normals 8.39 MB + bounds 5.59 MB + clusters (levels 1..5) 12.58 MB.
