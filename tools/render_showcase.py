@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Renders the glint showcase scenes of examples/showcase/ (issue 11 item 6) with the technique and with the naive
+"""Renders the glint showcase scenes of examples/showcase/ (issue 11 item 6; the P-NDF ones of issue 12 item 9) with the technique and with the naive
 version beside it, writes the pictures to docs/gallery/ (JPEG, 960x540) and the render times into the generated
 block of docs/gallery.md. Equal render time where the technique costs more per sample (the naive variant then gets
 the spp that takes as long, measured on a quarter-size probe).
@@ -17,7 +17,7 @@ import tempfile
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from specula_validation import ROOT, page  # noqa: E402
-from specula_validation.render import Renderer, rebase_files  # noqa: E402
+from specula_validation.render import Renderer, rebase_files, tiled_uv_nodes  # noqa: E402
 
 SHOW = os.path.join(ROOT, "examples", "showcase")
 
@@ -39,6 +39,39 @@ def sampled_lights(scene):
     return s
 
 
+# Roughness of the naive P-NDF stand-in: near-mirror GGX (alpha = 0.0025), the plain normal mapping the P-NDF converges
+# to as the normal map's own detail, rather than a roughness, makes the highlight.
+NAIVE_PNDF_ROUGHNESS = 0.05
+
+
+def plain_normal_mapping(scene):
+    """The naive P-NDF: every bsdf.glint_pndf becomes the same map as plain normal mapping (texture.image raw ->
+    texture.normal_map) on near-mirror GGX with the same Fresnel; its tiling (uv_scale) through tiled uv nodes."""
+    s = copy.deepcopy(scene)
+    for m in s["materials"].values():
+        nodes = m["nodes"]
+        for nid, n in list(nodes.items()):
+            if n.get("type") != "bsdf.glint_pndf":
+                continue
+            inp = n.get("inputs", {})
+            tiles = inp.get("uv_scale", 1)
+            uvn, look = tiled_uv_nodes([tiles, tiles])
+            for k, v in uvn.items():
+                nodes[f"{nid}_{k}"] = {"type": v["type"], "inputs": {
+                    kk: (f"@{nid}_{vv[1:]}" if isinstance(vv, str) and vv.startswith("@") else vv)
+                    for kk, vv in v.get("inputs", {}).items()}}
+            wire = {k: f"@{nid}_{v[1:]}" for k, v in look.items()}
+            nodes[f"{nid}_img"] = {"type": "texture.image", "inputs": dict(file=inp["normal_map"], colorspace="raw",
+                                                                          **wire)}
+            nodes[f"{nid}_nm"] = {"type": "texture.normal_map", "inputs": {"color": f"@{nid}_img.color"}}
+            ggx = {"roughness": NAIVE_PNDF_ROUGHNESS, "normal": f"@{nid}_nm.normal"}
+            for k in ("weight", "fresnel", "f0", "ior", "eta", "k"):
+                if k in inp:
+                    ggx[k] = inp[k]
+            nodes[nid] = {"type": "bsdf.ggx", "inputs": ggx}
+    return s
+
+
 # name, scene file, (technique label, naive label, naive transform, equal time?)
 SHOWCASES = [
     ("carpaint", "glint-carpaint.json", "glints + GGAA under a clear coat", "GGAA off", glint_ggaa_off, False),
@@ -46,6 +79,10 @@ SHOWCASES = [
     # Equal spp, not equal time: the integrated quad light costs 10-30x a light sample (docs/validation/glint.md).
     ("glitter", "glint-glitter.json", "glints integrated over the quad light", "light point-sampled", sampled_lights,
      False),
+    ("pndf-plate", "pndf-plate.json", "P-NDF glints (bsdf.glint_pndf)", "plain normal mapping, GGX roughness 0.05",
+     plain_normal_mapping, True),
+    ("pndf-kettle", "pndf-kettle.json", "P-NDF glints (bsdf.glint_pndf)", "plain normal mapping, GGX roughness 0.05",
+     plain_normal_mapping, True),
 ]
 
 BEGIN, END = "<!-- render_showcase: begin -->", "<!-- render_showcase: end -->"

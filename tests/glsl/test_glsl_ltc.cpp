@@ -97,6 +97,7 @@ std::vector<std::string> nodeStrings(const NodeSpec& s) {
     std::vector<std::string> v;
     for (auto& p : s.inputs) v.push_back(p.defString);
     if (s.id == "bsdf.ltc_normal_map") v[size_t(s.inputIndex("normal_map"))] = "generate:flakes:16:7";
+    if (s.id == "bsdf.glint_pndf") v[size_t(s.inputIndex("normal_map"))] = "generate:bumps:16:7";
     return v;
 }
 

@@ -93,6 +93,8 @@ std::vector<std::string> resourceStrings(const NodeSpec& s) {
     }
     // A square power-of-two map (the fixture image is 16×12): a generated 16² flakes map, 4 stored MIP levels.
     if (s.id == "bsdf.ltc_normal_map") v[size_t(s.inputIndex("normal_map"))] = "generate:flakes:16:7";
+    // bsdf.glint_pndf refuses maps that do not decode to unit normals (the RGBA fixture): a generated bump map.
+    if (s.id == "bsdf.glint_pndf") v[size_t(s.inputIndex("normal_map"))] = "generate:bumps:16:7";
     return v;
 }
 

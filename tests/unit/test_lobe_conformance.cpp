@@ -114,6 +114,9 @@ const FileInput kFileInputs[] = {
     // A generated 16² flakes map (no texture store needed); the suite's footprint is far below a texel, so this
     // exercises the level-0 lobes (per-texel base LTCs); the prefiltered levels are tested in test_ltc_prefilter.cpp.
     {"bsdf.ltc_normal_map", "normal_map", "generate:flakes:16:7"},
+    // A generated 64² bump map: the suite's footprint is below a texel, so the kernel is clamped to one texel and D is
+    // the sum over the few triangles around the shading point (sharp, spiky lobes: a hard case for the χ² binning).
+    {"bsdf.glint_pndf", "normal_map", "generate:bumps:16:7"},
 };
 std::vector<std::pair<std::string, json>> gridPoints(const NodeSpec& s, bool* needsFile = nullptr) {
     std::vector<std::pair<std::string, json>> g = {{"defaults", json::object()}};

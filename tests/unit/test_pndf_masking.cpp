@@ -411,29 +411,41 @@ TEST(PndfMasking, GgxFitAnisotropyAndRotation) {
     EXPECT_LT(smithG1GgxFit(a, direction(75, 0.0)), smithG1GgxFit(a, direction(75, kPiD / 2)));
 }
 
-// Spec §4.2 (c): the stored coefficients are the least-squares fit of the block-averaged (2A(φ))² at the K azimuths
-// (residual orthogonal to the basis), and the fitted curve reproduces the measured A(φ) at 360 azimuths to within
-// the printed residual.
+// Spec §4.2 (c), sheared form (pndf_masking.h PndfGgxFit): the stored coefficients are the least-squares fit of the
+// block-averaged α(φ)² = 4A(φ)(A(φ) - e_φ) at the K azimuths (residual orthogonal to the basis), and the fitted curve
+// reproduces it at 360 azimuths to within the printed residual. At grazing the visible part of a facet is the sign of
+// u·s, so A(φ) - A(φ+π) = ∫ u·s/m_z = e_φ exactly and α(φ)² = 4A(φ)A(φ+π): π-periodic, which the basis can fit, and
+// the stored tilt is the block mean of (A(0) - A(π), A(π/2) - A(3π/2)).
+// Relative RMS residual of the fit per level 1/3/5 (measured 3.18, 0.204, 0.049: a 2x2 block holds a few facets, whose
+// α(φ)² = 4A(φ)A(φ+π) is far from a quadratic form; larger blocks average towards one).
+constexpr double kFitResidualMargin[3] = {4.0, 0.3, 0.08};
+
 TEST(PndfMasking, GgxFitReproducesGrazingArea) {
     const int n = 64;
     const PndfManifold m(sinusoidMap(n, 9, 5, 0.6), n, n, kDefaultJacobianClamp, false);
     const int K = 16;
     const PndfGgxFit fit(m, K);
-    double worstOrth = 0, worstRms[3] = {0, 0, 0}, worstEven[3] = {0, 0, 0};
+    double worstOrth = 0, worstRms[3] = {0, 0, 0}, worstEven[3] = {0, 0, 0}, worstTilt = 0;
     for (int level : {1, 3, 5}) {
         const int size = 1 << level;
         for (Vec2d node : {Vec2d{0, 0}, Vec2d{1, 1}, Vec2d{0, 1}}) {
             const int nr = int(node.y), nc = int(node.x);
             const PndfGgxFit::Coeffs& co = fit.node(level, nr, nc);
-            auto measured = [&](double phi) {  // block mean of (2A)²
+            auto measured = [&](double phi) {  // block mean of 4 A(φ) A(φ+π)
                 double s = 0;
                 for (int r = nr * size; r < (nr + 1) * size; ++r)
-                    for (int c = nc * size; c < (nc + 1) * size; ++c) {
-                        double a = cellGrazingArea(m, r, c, phi);
-                        s += 4 * a * a;
-                    }
+                    for (int c = nc * size; c < (nc + 1) * size; ++c)
+                        s += 4 * cellGrazingArea(m, r, c, phi) * cellGrazingArea(m, r, c, phi + kPiD);
                 return s / (size * size);
             };
+            auto tiltAlong = [&](double phi) {  // block mean of A(φ) - A(φ+π)
+                double s = 0;
+                for (int r = nr * size; r < (nr + 1) * size; ++r)
+                    for (int c = nc * size; c < (nc + 1) * size; ++c)
+                        s += cellGrazingArea(m, r, c, phi) - cellGrazingArea(m, r, c, phi + kPiD);
+                return s / (size * size);
+            };
+            worstTilt = std::max({worstTilt, std::abs(co.tiltX - tiltAlong(0)), std::abs(co.tiltY - tiltAlong(kPiD / 2))});
             auto fitted = [&](double phi) {
                 double c = std::cos(phi), s = std::sin(phi);
                 return co.a * c * c + co.b * s * s + co.e * c * s;
@@ -448,8 +460,8 @@ TEST(PndfMasking, GgxFitReproducesGrazingArea) {
                 scale += std::abs(measured(phi));
             }
             for (double o : orth) worstOrth = std::max(worstOrth, std::abs(o) / scale);
-            // Residual against the measured (2A)² and against its π-periodic (even) part (y(φ) + y(φ+π))/2: the model
-            // is π-periodic, so the odd part (a block tilted one way sees more area from one side) is unrepresentable.
+            // Residual against the measured α(φ)² and against its π-periodic (even) part (y(φ) + y(φ+π))/2, which is
+            // all of it here (the tilt took the odd part of A).
             double sq = 0, sqEven = 0, mean = 0;
             for (int k = 0; k < 360; ++k) {
                 double phi = 2 * kPiD * k / 360, y = measured(phi), f = fitted(phi);
@@ -462,17 +474,19 @@ TEST(PndfMasking, GgxFitReproducesGrazingArea) {
             const double rms = std::sqrt(sq / 360) / mean, rmsEven = std::sqrt(sqEven / 360) / mean;
             worstRms[level / 2] = std::max(worstRms[level / 2], rms);
             worstEven[level / 2] = std::max(worstEven[level / 2], rmsEven);
-            std::printf("  level %d node (%d,%d): mean (2A)²=%.4f  relative RMS residual %.3f, of the even part %.3f\n",
+            std::printf("  level %d node (%d,%d): mean α²=%.4f  relative RMS residual %.3f, of the even part %.3f\n",
                         level, nr, nc, mean, rms, rmsEven);
         }
     }
-    std::printf("worst orthogonality %.2e; worst RMS residual level 1/3/5: %.3f %.3f %.3f (even part %.3f %.3f %.3f)\n",
-                worstOrth, worstRms[0], worstRms[1], worstRms[2], worstEven[0], worstEven[1], worstEven[2]);
+    std::printf("worst orthogonality %.2e; worst RMS residual level 1/3/5: %.3f %.3f %.3f (even part %.3f %.3f %.3f); "
+                "worst tilt error %.2e\n",
+                worstOrth, worstRms[0], worstRms[1], worstRms[2], worstEven[0], worstEven[1], worstEven[2], worstTilt);
     EXPECT_LT(worstOrth, 1e-5);  // float storage of (a, b, e)
-    // Per triangle not straddling the line x' = 0, A(φ)² + A(φ+π)² = ⟨u_φ, M_T⟩² is exactly quadratic in
-    // (cosφ, sinφ): the even part is fitted up to the few straddling triangles (measured <= 0.004).
-    for (int i = 0; i < 3; ++i) EXPECT_LT(worstEven[i], 0.02) << "level " << 2 * i + 1;
-    EXPECT_LT(worstRms[2], 0.2);  // 32x32 blocks: the odd part has mostly averaged out (measured 0.156)
+    EXPECT_LT(worstTilt, 1e-5);  // float storage of the tilt
+    for (int i = 0; i < 3; ++i) {
+        EXPECT_LT(worstRms[i], kFitResidualMargin[i]) << "level " << 2 * i + 1;
+        EXPECT_LT(worstEven[i], kFitResidualMargin[i]) << "level " << 2 * i + 1;
+    }
 }
 
 // Spec §4.2 (d): the fitted anisotropic GGX Smith G1 against the analytic G1 = cosθ/clamp(Ā) at moderate angles on a
@@ -511,7 +525,8 @@ TEST(PndfMasking, GgxFitAgainstAnalyticG1) {
     }
 }
 
-// Spec §4.2 budget at 1024²: memory <= 4 MiB, build time on one core printed (target <= 5 s).
+// Spec §4.2 budget at 1024²: memory <= 7 MiB (with the manifold's 26.6 MB, 33.6 MB: inside issue 12's 34 MB), build
+// time on one core printed (target <= 5 s).
 TEST(PndfMasking, GgxFitBudgetAt1024) {
     const int n = 1024;
     const PndfManifold m(sinusoidMap(n, 2, 24, 0.5), n, n, kDefaultJacobianClamp, false);
@@ -524,7 +539,7 @@ TEST(PndfMasking, GgxFitBudgetAt1024) {
     const PndfGgxFit& fit = *built;
     std::printf("GGX fit 1024², 32 azimuths, one thread: %.2f s, %zu bytes (%.3f MiB), levels %d..%d\n", secs, fit.memoryBytes(),
                 fit.memoryBytes() / 1048576.0, fit.firstLevel(), fit.firstLevel() + fit.levelCount() - 1);
-    EXPECT_LE(fit.memoryBytes(), size_t(4) << 20);
+    EXPECT_LE(fit.memoryBytes(), size_t(7) << 20);
     EXPECT_EQ(fit.levelCount(), 10);
     EXPECT_LT(secs, 10.0);  // headroom over the 5 s target for a shared CI machine; the measured time is printed
 }

@@ -412,6 +412,62 @@ double projectedArea(const PndfManifold& m, const Footprint& fp, const Vec3& w, 
     return den > 0 ? num / den : dir.c;
 }
 
+namespace {
+// The n² affine sub-triangles of t (the same map restricted to a uniform split of its parameter simplex): upright
+// ones at (i, j)/n with steps (1/n, 0), (0, 1/n), inverted ones at (i + 1, j + 1)/n with steps (-1/n, 0), (0, -1/n).
+template <class F>
+void forEachSubTriangle(const ManifoldTriangle& t, int n, F f) {
+    if (n <= 1) {
+        f(t);
+        return;
+    }
+    const double h = 1.0 / n;
+    auto at = [&](double t1, double t2, ManifoldTriangle& s) {
+        s.sOrigin = {t.sOrigin.x + t1 * t.sEdge1.x + t2 * t.sEdge2.x, t.sOrigin.y + t1 * t.sEdge1.y + t2 * t.sEdge2.y};
+        s.xOrigin = {t.xOrigin.x + t1 * t.xStep1.x + t2 * t.xStep2.x, t.xOrigin.y + t1 * t.xStep1.y + t2 * t.xStep2.y};
+    };
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i + j < n; ++i)
+            for (int inverted = 0; inverted < 2; ++inverted) {
+                if (inverted && i + j > n - 2) continue;
+                const double d = inverted ? -h : h;
+                ManifoldTriangle s = t;
+                at(inverted ? (i + 1) * h : i * h, inverted ? (j + 1) * h : j * h, s);
+                s.sEdge1 = {t.sEdge1.x * d, t.sEdge1.y * d};
+                s.sEdge2 = {t.sEdge2.x * d, t.sEdge2.y * d};
+                s.xStep1 = {t.xStep1.x * d, t.xStep1.y * d};
+                s.xStep2 = {t.xStep2.x * d, t.xStep2.y * d};
+                s.jacobian = t.jacobian * h * h;
+                s.xArea = t.xArea * h * h;
+                f(s);
+            }
+}
+}  // namespace
+
+Vec2d footprintTilt(const PndfManifold& m, const Footprint& fp) {
+    const IndexRange r = footprintRange(fp, 0);
+    // Sub-triangles where the kernel varies within a texel (σ of a few texels): the mean tilt is kernel-weighted per
+    // point, not per triangle, so a triangle's kernel mass times its mean tilt is refined like the Gaussian's mass.
+    const int n = std::clamp(int(std::ceil(3.0 / std::min(fp.sigmaU, fp.sigmaV))), 1, 3);
+    double tx = 0, ty = 0, den = 0;
+    for (int row = r.rowLo; row <= r.rowHi; ++row)
+        for (int col = r.colLo; col <= r.colHi; ++col) {
+            ManifoldTriangle tris[2];
+            m.cellTriangles(row, col, tris);
+            for (const ManifoldTriangle& whole : tris)
+                forEachSubTriangle(whole, n, [&](const ManifoldTriangle& t) {
+                    const double g = triangleKernelMass(t, fp);
+                    if (!(g > 0)) return;
+                    const double weight = 2.0 * g / std::abs(t.jacobian);
+                    const TriGeom geom = prepare(t);
+                    tx += weight * geom.moment.x;
+                    ty += weight * geom.moment.y;
+                    den += weight * geom.area;
+                });
+        }
+    return den > 0 ? Vec2d{tx / den, ty / den} : Vec2d{0, 0};
+}
+
 double smithG1FromProjectedArea(double area, double cosTheta) {
     if (!(cosTheta > 0)) return 0.0;
     const double c = std::min(cosTheta, 1.0);
@@ -448,9 +504,11 @@ double smithG1GgxFit(const GgxAlpha& alpha, const Vec3& w) {
     if (!(z > 0)) return 0.0;
     const double cp = std::cos(alpha.phi0), sp = std::sin(alpha.phi0);
     const double p = x * cp + y * sp, q = -x * sp + y * cp;  // ω_xy in the principal frame
-    // α(φ)² tan²θ = (α1² cos²(φ-φ0) + α2² sin²(φ-φ0)) sin²θ / cos²θ.
-    const double a2t2 = (alpha.alpha1 * alpha.alpha1 * p * p + alpha.alpha2 * alpha.alpha2 * q * q) / (z * z);
-    return 2.0 / (1.0 + std::sqrt(1.0 + a2t2));
+    // α(φ)² |ω_xy|² = α1² (ω_xy·d1)² + α2² (ω_xy·d2)².
+    const double a2s2 = alpha.alpha1 * alpha.alpha1 * p * p + alpha.alpha2 * alpha.alpha2 * q * q;
+    const double e = z + x * alpha.tiltX + y * alpha.tiltY;
+    const double area = 0.5 * (e + std::sqrt(a2s2 + e * e));
+    return z / std::max(area, z);
 }
 
 double cellGrazingArea(const PndfManifold& m, int row, int col, double phi) {
@@ -508,7 +566,7 @@ PndfGgxFit::PndfGgxFit(const PndfManifold& m, int azimuths)
         std::vector<double> y(azimuths);
         for (int nr = range.begin(); nr < range.end(); ++nr)
             for (int nc = 0; nc < w0; ++nc) {
-                double acc[3] = {0, 0, 0};
+                double acc[5] = {0, 0, 0, 0, 0};
                 for (int r = nr * B; r < (nr + 1) * B; ++r)
                     for (int c = nc * B; c < (nc + 1) * B; ++c) {
                         ManifoldTriangle tris[2];
@@ -516,17 +574,25 @@ PndfGgxFit::PndfGgxFit(const PndfManifold& m, int azimuths)
                         const TriGeom g0 = prepare(tris[0]), g1 = prepare(tris[1]);
                         const double w0t = tris[0].xArea / std::abs(tris[0].jacobian);
                         const double w1t = tris[1].xArea / std::abs(tris[1].jacobian);
+                        // The cell's mean tilt ∫ s/m_z dx = Σ_T (x-area/|J|) ∬_{s(T)} s/m_z d²s.
+                        const double tx = g0.moment.x * w0t + g1.moment.x * w1t;
+                        const double ty = g0.moment.y * w0t + g1.moment.y * w1t;
                         double rhs[3] = {0, 0, 0};
                         for (int k = 0; k < azimuths; ++k) {
                             const double A = projectedAreaOf(g0, dirs[k]) * w0t + projectedAreaOf(g1, dirs[k]) * w1t;
-                            const double y2 = 4.0 * A * A;  // (2A)²
+                            // α(φ)² of the GGX sheared by the tilt whose grazing area is A: 2A = e + sqrt(α² + e²).
+                            const double e = dirs[k].u.x * tx + dirs[k].u.y * ty;
+                            const double y2 = std::max(0.0, 4.0 * A * (A - e));
                             for (int i = 0; i < 3; ++i) rhs[i] += basis[3 * k + i] * y2;
                         }
                         for (int i = 0; i < 3; ++i)
                             acc[i] += Gi[i][0] * rhs[0] + Gi[i][1] * rhs[1] + Gi[i][2] * rhs[2];
+                        acc[3] += tx;
+                        acc[4] += ty;
                     }
                 const double inv = 1.0 / (B * B);
-                first[size_t(nr) * w0 + nc] = {float(acc[0] * inv), float(acc[1] * inv), float(acc[2] * inv)};
+                first[size_t(nr) * w0 + nc] = {float(acc[0] * inv), float(acc[1] * inv), float(acc[2] * inv),
+                                               float(acc[3] * inv), float(acc[4] * inv)};
             }
     });
     // Coarser levels: 2x2 averages (in double) while both sides stay divisible.
@@ -537,15 +603,18 @@ PndfGgxFit::PndfGgxFit(const PndfManifold& m, int azimuths)
         std::vector<Coeffs> level(size_t(w) * h);
         for (int nr = 0; nr < h; ++nr)
             for (int nc = 0; nc < w; ++nc) {
-                double s[3] = {0, 0, 0};
+                double s[5] = {0, 0, 0, 0, 0};
                 for (int dr = 0; dr < 2; ++dr)
                     for (int dc = 0; dc < 2; ++dc) {
                         const Coeffs& f = fine[size_t(2 * nr + dr) * fw + 2 * nc + dc];
                         s[0] += f.a;
                         s[1] += f.b;
                         s[2] += f.e;
+                        s[3] += f.tiltX;
+                        s[4] += f.tiltY;
                     }
-                level[size_t(nr) * w + nc] = {float(0.25 * s[0]), float(0.25 * s[1]), float(0.25 * s[2])};
+                level[size_t(nr) * w + nc] = {float(0.25 * s[0]), float(0.25 * s[1]), float(0.25 * s[2]),
+                                              float(0.25 * s[3]), float(0.25 * s[4])};
             }
         levels_.push_back(std::move(level));
     }
@@ -571,7 +640,7 @@ GgxAlpha PndfGgxFit::alphaAt(const Footprint& fp) const {
     const double cx = std::floor(fx), cy = std::floor(fy);
     const double tx = fx - cx, ty = fy - cy;
     const int c0 = int(cx), r0 = int(cy);
-    double s[3] = {0, 0, 0};
+    double s[5] = {0, 0, 0, 0, 0};
     for (int dr = 0; dr < 2; ++dr)
         for (int dc = 0; dc < 2; ++dc) {
             const double wgt = (dr ? ty : 1 - ty) * (dc ? tx : 1 - tx);
@@ -579,8 +648,13 @@ GgxAlpha PndfGgxFit::alphaAt(const Footprint& fp) const {
             s[0] += wgt * n.a;
             s[1] += wgt * n.b;
             s[2] += wgt * n.e;
+            s[3] += wgt * n.tiltX;
+            s[4] += wgt * n.tiltY;
         }
-    return ggxAlphaFromFit(s[0], s[1], s[2]);
+    GgxAlpha g = ggxAlphaFromFit(s[0], s[1], s[2]);
+    g.tiltX = s[3];
+    g.tiltY = s[4];
+    return g;
 }
 
 size_t PndfGgxFit::memoryBytes() const {

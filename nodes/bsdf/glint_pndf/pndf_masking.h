@@ -64,6 +64,11 @@ struct ProjectedAreaStats {
 double projectedArea(const PndfManifold& m, const Footprint& fp, const Vec3& w, const ProjectedAreaOptions& opt = {},
                      ProjectedAreaStats* stats = nullptr);
 
+// The footprint's mean tilt E_K[s/m_z] (GgxAlpha::tiltX/Y) summed over every cell of its support box like
+// projectedArea: Σ_T 2g_T/|J_T| ∬_{s(T)} s/m_z d²s over the same kernel mass. The GGX fit stores the tilt of 2^ℓ blocks;
+// a footprint of a few texels leans as its own facets do, which this gives at (2σ+1)² cells of cost.
+Vec2d footprintTilt(const PndfManifold& m, const Footprint& fp);
+
 // Spec §4: G1 = cosθ / clamp(A, cosθ, 1), so G1 ∈ [cosθ, 1] ⊂ (0, 1] for ω_z > 0; 0 for ω_z <= 0.
 double smithG1FromProjectedArea(double area, double cosTheta);
 double smithG1Analytic(const PndfManifold& m, const Footprint& fp, const Vec3& w, const ProjectedAreaOptions& opt = {});
@@ -72,6 +77,9 @@ double smithG1Analytic(const PndfManifold& m, const Footprint& fp, const Vec3& w
 // (radians, in (-π/2, π/2]) of the α1 axis in the shading frame (x = tangent = u).
 struct GgxAlpha {
     double alpha1 = 0, alpha2 = 0, phi0 = 0;
+    // The footprint's mean tilt t = E_K[s/m_z] (= -mean ∇h): the projected area of its mean plane per unit texel area
+    // is e(ω) = ω_z + ω_xy·t. smithG1GgxFit shears the GGX lobe by it (0: the centred GGX of spec §4.2).
+    double tiltX = 0, tiltY = 0;
     double alphaSquaredAt(double phi) const;
 };
 
@@ -79,7 +87,14 @@ struct GgxAlpha {
 // negative eigenvalues of a degenerate fit are clamped to 0.
 GgxAlpha ggxAlphaFromFit(double a, double b, double e);
 
-// Heitz 2014 anisotropic GGX Smith: G1 = 2 / (1 + sqrt(1 + α(φ)² tan²θ)); 0 for ω_z <= 0, 1 for α = 0.
+// Smith G1 = cosθ / max(A(ω), cosθ) of the GGX slope distribution sheared by the footprint's mean tilt: with the
+// 1D GGX slope marginal along ω's azimuth (a Student-t of ν = 2, scale α(φ)), E[(q - μ)₊] = (sqrt(α² + μ²) - μ)/2 gives
+// the projected area A(ω) = (e + sqrt(α(φ)² |ω_xy|² + e²))/2 with e = ω_z + ω_xy·t (the mean plane's projected area;
+// the shifted-slope construction of LEAN's Beckmann Λ, Olano & Baker 2010). Untilted (t = 0) this is Heitz 2014's
+// anisotropic GGX Smith 2 / (1 + sqrt(1 + α(φ)² tan²θ)). The tilt keeps the lobe's albedo ≤ 1 where a small
+// footprint's facets lean towards a grazing viewer, which the centred GGX of the paper's code does not (its G1 ≈ 1
+// there while ∫ D⟨ω,m⟩ = e(ω) > cosθ). A is clamped below at cosθ (G1 <= 1) only: spec §4.1 also clamps it at 1, which
+// would let such footprints reflect more than they receive. 0 for ω_z <= 0.
 double smithG1GgxFit(const GgxAlpha& alpha, const Vec3& w);
 
 // The grazing (θ = 90°) projected area of cell (row, col) per unit texel area, A(φ) = Σ_{T in cell} Π_T/|J_T|, with
@@ -87,12 +102,15 @@ double smithG1GgxFit(const GgxAlpha& alpha, const Vec3& w);
 double cellGrazingArea(const PndfManifold& m, int row, int col, double phi);
 
 // Spec §4.2: per cell the grazing A(φ) at `azimuths` angles φ_k = 2πk/K, the linear least-squares fit
-// (2A(φ))² ≈ a cos²φ + b sin²φ + e cosφ sinφ, and MIP averages of (a, b, e) over 2^ℓ x 2^ℓ blocks.
+// α(φ)² ≈ a cos²φ + b sin²φ + e cosφ sinφ, and MIP averages of (a, b, e) and of the cell's mean tilt t = ∫ s/m_z dx
+// over 2^ℓ x 2^ℓ blocks. The spec fits (2A)², the centred GGX's α(φ)² at grazing; we fit the sheared GGX's
+// α(φ)² = 4A(A - e_φ) with e_φ = (cosφ, sinφ)·t (smithG1GgxFit at θ = 90°), which is (2A)² for an untilted cell and
+// leaves the odd part of A(φ), the tilt, to t instead of the π-periodic basis that cannot represent it.
 // Deviation from the spec, documented: the spec averages A over a block and then fits; averaging the per-cell
 // coefficients instead is (the fit being linear in its data) the fit of the block-averaged (2A)², which differs from
 // (2·mean A)² by the block's variance of 2A. It lets one pass build every level from the cells.
-// Storage: float (a, b, e) per node from level 1 (2x2 cells) up, the level-0 cells are not kept: 12·(4^10-1)/3 B
-// = 4.0 MiB for a 1024² map. Levels exist while width and height are divisible by 2^ℓ (level 0 is kept instead
+// Storage: float (a, b, e, t_x, t_y) per node from level 1 (2x2 cells) up, the level-0 cells are not kept:
+// 20·(4^10-1)/3 B = 6.7 MiB for a 1024² map. Levels exist while width and height are divisible by 2^ℓ (level 0 is kept instead
 // when a side is odd). Build: TBB parallel_for over level-1 rows; every node is computed independently in a fixed
 // order, so the result does not depend on the thread count.
 class PndfGgxFit {
@@ -105,6 +123,7 @@ public:
 
     struct Coeffs {
         float a, b, e;
+        float tiltX, tiltY;
     };
     // Fit of node (row, col) at `level` (firstLevel <= level < firstLevel + levelCount), row/col unwrapped.
     const Coeffs& node(int level, int row, int col) const;
