@@ -327,11 +327,11 @@ int main(int argc, char** argv) {
             CHECK(s.width == 16 && s.height == 12 && s.samples == 16 * 12 * 2);
             A.spc_result_destroy(r2);
             r2 = NULL;
+            A.spc_scene_destroy(small);
             lo.size = 4; /* a struct from an unknown, older header */
-            CHECK(A.spc_scene_load_string(ctx, kScene, "", &lo, &small) == SPC_USAGE);
+            CHECK(A.spc_scene_load_string(ctx, kScene, "", &lo, &small) == SPC_USAGE && small == NULL);
             lo = (spc_load_options)SPC_LOAD_OPTIONS_INIT;
             lo.crop_x0 = 8, lo.crop_y0 = 4, lo.crop_x1 = 24, lo.crop_y1 = 20;
-            A.spc_scene_destroy(small);
             OK(ctx, A.spc_scene_load_string(ctx, kScene, "", &lo, &small));
             OK(ctx, A.spc_render(ctx, small, NULL, NULL, NULL, &r2));
             OK(ctx, A.spc_result_stats(ctx, r2, &s));
