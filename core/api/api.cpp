@@ -130,6 +130,8 @@ struct Scene::Impl {
     Json doc;
     std::string baseDir, path;  // path: the file it came from ("" for a string)
     specula::Scene scene;
+    LoadOptions options;        // re-applied when setValue re-loads
+    std::string name;           // for messages
 };
 
 namespace {
@@ -140,6 +142,8 @@ std::unique_ptr<Scene::Impl> loadImpl(const std::string& text, const std::string
     impl->doc = Json::parse(text);  // valid: the loader accepted it
     impl->baseDir = baseDir.empty() ? "." : baseDir;
     impl->path = path;
+    impl->options = o;
+    impl->name = name;
     return impl;
 }
 }  // namespace
@@ -212,6 +216,78 @@ void Scene::setLiteral(const std::string& pointer, const std::string& valueJson)
         for (auto& slot : impl_->scene.materials)
             if (slot->name() == key) slot = std::move(m);
         impl_->doc["materials"][key] = std::move(mat);
+    });
+}
+
+void Scene::setValue(const std::string& pointer, const std::string& valueJson) {
+    guarded([&] {
+        if (pointer.empty() || pointer[0] != '/')
+            throw Error(ErrorCode::BadInput, pointer, "setValue needs a JSON pointer naming a value inside the scene (e.g. /render/spp)");
+        Json value = Json::parse(valueJson, nullptr, false);
+        if (value.is_discarded()) throw Error(ErrorCode::BadInput, pointer, "value is not JSON: " + valueJson);
+        Json::json_pointer jp;
+        try {
+            jp = Json::json_pointer(pointer);
+        } catch (const std::exception&) {
+            throw Error(ErrorCode::BadInput, pointer, "not a valid JSON pointer (RFC 6901)");
+        }
+        const Json::json_pointer parent = jp.parent_pointer();
+        // The cheap path: a value inside a material node (/materials/<name>/<at least two more tokens>) that
+        // is not an object is a literal edit: setLiteral recompiles that material alone.
+        const std::string prefix = "/materials/";
+        size_t depth = 0;
+        for (char c : pointer) depth += c == '/';
+        if (pointer.compare(0, prefix.size(), prefix) == 0 && depth >= 4 && !value.is_object() &&
+            impl_->doc.contains(parent) && impl_->doc.at(parent).is_object() &&
+            !(impl_->doc.contains(jp) && impl_->doc.at(jp).is_object())) {
+            setLiteral(pointer, valueJson);
+            return;
+        }
+        if (!impl_->doc.contains(parent) || !(impl_->doc.at(parent).is_object() || impl_->doc.at(parent).is_array())) {
+            // Name the first missing (or non-container) step, with the nearest existing key as the suggestion.
+            const Json* node = &impl_->doc;
+            std::string at;
+            size_t pos = 1;
+            while (pos <= pointer.size()) {
+                size_t next = pointer.find('/', pos);
+                if (next == std::string::npos) next = pointer.size();
+                std::string token = unescapeToken(pointer.substr(pos, next - pos));
+                std::string here = at + "/" + pointer.substr(pos, next - pos);
+                if (node->is_object() && !node->contains(token)) {
+                    std::vector<std::string> keys;
+                    for (auto it = node->begin(); it != node->end(); ++it) keys.push_back(it.key());
+                    throw Error(ErrorCode::BadInput, here, "no key '" + token + "' in " + (at.empty() ? "/" : at),
+                                nearestName(token, keys));
+                }
+                if (!node->is_object() && !node->is_array())
+                    throw Error(ErrorCode::BadInput, here, (at.empty() ? std::string("/") : at) + " is not an object or array");
+                node = node->is_object() ? &node->at(token) : nullptr;
+                if (!node) break;  // an array step: reported below
+                at = here;
+                pos = next + 1;
+            }
+            throw Error(ErrorCode::BadInput, pointer, "no such object or array in the scene: " +
+                                                          (parent.empty() ? std::string("/") : parent.to_string()));
+        }
+        Json doc = impl_->doc;
+        Json& p = doc.at(parent);
+        const std::string token = jp.back();
+        if (p.is_array()) {
+            if (token == "-") {
+                p.push_back(std::move(value));
+            } else {
+                size_t i = 0;
+                bool digits = !token.empty() && token.find_first_not_of("0123456789") == std::string::npos;
+                if (digits) i = std::stoul(token);
+                if (!digits || i >= p.size())
+                    throw Error(ErrorCode::BadInput, pointer, "array index out of range (use /- to append)");
+                p[i] = std::move(value);
+            }
+        } else {
+            p[token] = std::move(value);
+        }
+        // Re-load the edited document; *this is replaced only when it loads.
+        impl_ = loadImpl(doc.dump(), impl_->baseDir, impl_->options, impl_->name, impl_->path);
     });
 }
 

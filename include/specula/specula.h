@@ -171,6 +171,14 @@ public:
     // unchanged.
     void setLiteral(const std::string& pointer, const std::string& valueJson);
 
+    // Sets any value of the scene document by JSON pointer, e.g. ("/render/spp", "8") or ("/camera/fov", "30");
+    // "/-" appends to an array. A material literal goes through setLiteral (cheap); anything else re-loads the
+    // whole edited document (geometry, acceleration structure, textures: the cost of fromString), keeping
+    // baseDir, the file path and the LoadOptions of the original load (which still override the document).
+    // Throws Error (bad_input, with the pointer) if the parent of the pointer does not exist or the edited
+    // scene does not load; the scene is then unchanged. Not while a job renders the scene.
+    void setValue(const std::string& pointer, const std::string& valueJson);
+
     RenderResult render(const RenderOptions& opts = {}, TileCallback onTile = {}) const;
     // The job keeps a reference to this scene: keep the scene alive (and unmodified) until wait() returns.
     RenderJob renderAsync(const RenderOptions& opts = {}, TileCallback onTile = {}) const;

@@ -108,6 +108,53 @@ TEST(Api, SetLiteralRecompilesOneMaterialAndMatchesAFreshLoad) {
     EXPECT_EQ(beauty(s.render()), before);
 }
 
+// setValue: any pointer; a literal goes through setLiteral, anything else re-loads the edited document with the
+// original LoadOptions; failures name the pointer and leave the scene unchanged.
+TEST(Api, SetValueEditsAnyPointerAndMatchesAFreshLoad) {
+    sp::Scene s = sp::Scene::fromString(kScene);
+    s.setValue("/render/spp", "3");
+    s.setValue("/camera/fov", "30");
+    s.setValue("/materials/gold/nodes/spec/inputs/roughness", "0.4");
+    std::string edited = kScene;
+    edited.replace(edited.find("\"spp\": 2"), 8, "\"spp\": 3");
+    edited.replace(edited.find("\"fov\": 40"), 9, "\"fov\": 30");
+    edited.replace(edited.find("\"roughness\": 0.1"), 16, "\"roughness\": 0.4");
+    sp::RenderResult r = s.render();
+    EXPECT_EQ(r.stats().samples, 80u * 40u * 3u);
+    EXPECT_EQ(beauty(r), beauty(sp::Scene::fromString(edited).render()));
+    s.setValue("/lights/-", R"({"type": "point", "position": [-1.5, -2, 3], "power": 100})");
+    EXPECT_NE(s.json().find("-1.5"), std::string::npos);
+
+    // LoadOptions stay in force across a re-load.
+    sp::LoadOptions lo;
+    lo.spp = 1;
+    sp::Scene o = sp::Scene::fromString(kScene, "", lo);
+    o.setValue("/render/width", "40");
+    sp::RenderResult ro = o.render();
+    EXPECT_EQ(ro.width(), 40);
+    EXPECT_EQ(ro.stats().samples, 40u * 40u * 1u);
+
+    std::vector<float> before = beauty(s.render());
+    auto expectError = [&](const char* pointer, const char* value, const std::string& wantPointer, const char* suggestion) {
+        try {
+            s.setValue(pointer, value);
+            ADD_FAILURE() << "expected an Error for " << pointer;
+        } catch (const Error& e) {
+            EXPECT_EQ(e.code(), ErrorCode::BadInput) << e.what();
+            EXPECT_EQ(e.pointer(), wantPointer) << e.what();
+            if (suggestion) EXPECT_EQ(e.suggestion(), suggestion) << e.what();
+        }
+    };
+    expectError("/render/sppp", "4", "/render/sppp", "spp");                           // the loader's unknown key
+    expectError("/render/spp", "0", "/render/spp", nullptr);                           // out of range
+    expectError("/render/spp", "{nope", "/render/spp", nullptr);                       // not JSON
+    expectError("/rendr/spp", "4", "/rendr", "render");                                // missing parent
+    expectError("/materials/glod/nodes/spec/inputs/roughness", "0.2", "/materials/glod", "gold");
+    expectError("/shapes/7/radius", "1", "/shapes/7/radius", nullptr);                 // array index out of range
+    expectError("render/spp", "4", "render/spp", nullptr);                             // not a pointer
+    EXPECT_EQ(beauty(s.render()), before);
+}
+
 TEST(Api, TilesCoverTheImageOnceWithFinalPixels) {
     sp::Scene s = sp::Scene::fromString(kScene);
     std::mutex m;
