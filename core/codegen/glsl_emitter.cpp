@@ -195,17 +195,20 @@ GlslModule emitGlsl(const GraphDesc& g, const GlslOptions& opt) {
     if (!mod.resources.empty()) o << "\n";
     // Shared libraries of the live nodes (NodeSpec::glslLibraries), each once, in first-use order over the sorted
     // node files, before any node file calls into them (guarded too: modules may be concatenated).
-    {
-        std::set<std::string> seen;
-        for (auto& fileIds : files)
-            for (int n : live)
-                if (g.nodes[n].spec->glslFile == fileIds.first)
-                    for (const std::string& lib : g.nodes[n].spec->glslLibraries)
-                        if (seen.insert(lib).second) o << glslLibraryText(lib) << "\n";
-    }
+    std::set<std::string> emittedLibraries;
+    for (auto& fileIds : files)
+        for (int n : live)
+            if (g.nodes[n].spec->glslFile == fileIds.first)
+                for (const std::string& lib : g.nodes[n].spec->glslLibraries)
+                    if (emittedLibraries.insert(lib).second) o << glslLibraryText(lib) << "\n";
     for (auto& [file, ids] : files) {
         std::string list;
         for (auto& id : ids) list += (list.empty() ? "" : ", ") + id;
+        // A node file another node already uses as a library is in the module once, above (same guard).
+        if (emittedLibraries.count(file)) {
+            o << "// ---- nodes/" << file << " (" << list << "): emitted above as a library\n\n";
+            continue;
+        }
         const std::string guard = glslFileGuard(file);
         o << "// ---- nodes/" << file << " (" << list << ")\n#ifndef " << guard << "\n#define " << guard << "\n";
         const std::string* src = codegen::embeddedGlsl(file);

@@ -244,6 +244,20 @@ TEST(GlintPndfNode, GlslDeclaresTheSubstituteWithOneWarning) {
     ASSERT_EQ(mod.warnings.size(), 1u);
     EXPECT_NE(mod.warnings[0].find("bsdf.glint_pndf: not supported on the GPU"), std::string::npos) << mod.warnings[0];
     EXPECT_NE(mod.source.find("// WARNING: bsdf.glint_pndf"), std::string::npos);
+    // Beside texture.lean and bsdf.ggx_filtered (whose files the substitute uses as libraries) each file is emitted
+    // once: one include guard per file (tests/glsl/data/materials.json "pndf_beside_lean" compiles it).
+    json both = {{"nodes",
+                  {{"p", {{"type", "bsdf.glint_pndf"}, {"inputs", {{"normal_map", kMap}}}}},
+                   {"l", {{"type", "texture.lean"}, {"inputs", {{"file", kMap}}}}},
+                   {"f", {{"type", "bsdf.ggx_filtered"}, {"inputs", {{"covariance", "@l.covariance"}}}}},
+                   {"s", {{"type", "closure.add"}, {"inputs", {{"a", "@p.bsdf"}, {"b", "@f.bsdf"}}}}}}},
+                 {"output", "@s.bsdf"}};
+    const std::string src = codegen::emitGlsl(graph::parseGraph(both, "/materials/b")).source;
+    for (const char* fn : {"void spc_lean_bilinear(", "void spc_bsdf_ggx_filtered(", "vec3 spc_fresnel_f0("}) {
+        const size_t first = src.find(fn);
+        ASSERT_NE(first, std::string::npos) << fn;
+        EXPECT_EQ(src.find(fn, first + 1), std::string::npos) << fn << " defined twice";
+    }
     // A material without it has none.
     json plain = {{"nodes", {{"d", {{"type", "bsdf.diffuse"}}}}}, {"output", "@d.bsdf"}};
     EXPECT_TRUE(codegen::emitGlsl(graph::parseGraph(plain, "/materials/p")).warnings.empty());
