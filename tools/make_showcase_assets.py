@@ -106,6 +106,24 @@ def write_hdr(path, fn):
     os.replace(tmp, path)
 
 
+def write_grid_obj(path, name, verts, norms, uvs, nu, nv, digits):
+    """An OBJ of a (nu + 1) x (nv + 1) vertex grid (rows of constant v) as quads, written atomically."""
+    fmt = "%%.%df" % digits
+    lines = ["# Specula showcase %s (tools/make_showcase_assets.py)" % name]
+    lines += ["v " + " ".join(fmt % c for c in p) for p in verts]
+    lines += ["vn %.4f %.4f %.4f" % p for p in norms]
+    lines += ["vt " + " ".join(fmt % c for c in p) for p in uvs]
+    w = nu + 1
+    for j in range(nv):
+        for i in range(nu):
+            q = [j * w + i + 1, j * w + i + 2, (j + 1) * w + i + 2, (j + 1) * w + i + 1]
+            lines.append("f " + " ".join("%d/%d/%d" % (k, k, k) for k in q))
+    tmp = path + ".tmp"
+    with open(tmp, "w") as f:
+        f.write("\n".join(lines) + "\n")
+    os.replace(tmp, path)
+
+
 def write_body(path, nu=96, nv=48, size=(1.2, 0.6, 0.35), e_long=0.45, e_lat=0.6):
     """Superellipsoid x = a c(v)^e1 c(u)^e2 ...: signed powers of cos/sin. Normals from the implicit function's gradient
     F = ((x/a)^(2/e2) + (y/b)^(2/e2))^(e2/e1) + (z/c)^(2/e1)."""
@@ -137,19 +155,7 @@ def write_body(path, nu=96, nv=48, size=(1.2, 0.6, 0.35), e_long=0.45, e_lat=0.6
             verts.append((x, y, z + c))
             norms.append((gx / n, gy / n, gz / n))
             uvs.append((u, v))
-    lines = ["# Specula showcase body (tools/make_showcase_assets.py)"]
-    lines += ["v %.5f %.5f %.5f" % p for p in verts]
-    lines += ["vn %.4f %.4f %.4f" % p for p in norms]
-    lines += ["vt %.5f %.5f" % p for p in uvs]
-    w = nu + 1
-    for j in range(nv):
-        for i in range(nu):
-            q = [j * w + i + 1, j * w + i + 2, (j + 1) * w + i + 2, (j + 1) * w + i + 1]
-            lines.append("f " + " ".join("%d/%d/%d" % (k, k, k) for k in q))
-    tmp = path + ".tmp"
-    with open(tmp, "w") as f:
-        f.write("\n".join(lines) + "\n")
-    os.replace(tmp, path)
+    write_grid_obj(path, "body", verts, norms, uvs, nu, nv, digits=5)
 
 
 def catmull_rom(points, t):
@@ -194,19 +200,7 @@ def write_kettle(path, nu=96, nv=72):
             verts.append((max(r, 0.0) * c, max(r, 0.0) * s, z))
             norms.append((nr * c, nr * s, nz))
             uvs.append((u, arc[j] / (2.0 * math.pi * mean_r)))
-    lines = ["# Specula showcase kettle (tools/make_showcase_assets.py)"]
-    lines += ["v %.4f %.4f %.4f" % p for p in verts]
-    lines += ["vn %.4f %.4f %.4f" % p for p in norms]
-    lines += ["vt %.4f %.4f" % p for p in uvs]
-    w = nu + 1
-    for j in range(nv):
-        for i in range(nu):
-            q = [j * w + i + 1, j * w + i + 2, (j + 1) * w + i + 2, (j + 1) * w + i + 1]
-            lines.append("f " + " ".join("%d/%d/%d" % (k, k, k) for k in q))
-    tmp = path + ".tmp"
-    with open(tmp, "w") as f:
-        f.write("\n".join(lines) + "\n")
-    os.replace(tmp, path)
+    write_grid_obj(path, "kettle", verts, norms, uvs, nu, nv, digits=4)
 
 
 def main():

@@ -22,8 +22,9 @@ struct Footprint {
     double sigmaU = 1, sigmaV = 1;
     FootprintKernel kernel = FootprintKernel::Gaussian;
     // Spec §1: the authors' Gaussian (std σ/3, truncated to the |Δ| <= σ box) is not renormalised, mass 0.99461.
-    // true (default) divides by the truncated mass so that ∫ D_P = 1 for every kernel and sampling by rejection
-    // inside the box (the spec §2.4 fix) matches eval exactly; false reproduces the authors' code.
+    // true (default) divides by the truncated mass so that ∫ D_P = 1 for every kernel and sampling by the inverse CDF
+    // of the Gaussian truncated to the box (pndf_sample.h; the spec §2.4 fix) matches eval exactly; false reproduces
+    // the authors' code.
     bool gaussianUnitMass = true;
 
     // Footprint from texture coordinates: x = frac(u·tiles)·N along columns (spec §1), σ already in texels.

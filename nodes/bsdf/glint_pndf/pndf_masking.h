@@ -64,9 +64,9 @@ struct ProjectedAreaStats {
 double projectedArea(const PndfManifold& m, const Footprint& fp, const Vec3& w, const ProjectedAreaOptions& opt = {},
                      ProjectedAreaStats* stats = nullptr);
 
-// The footprint's mean tilt E_K[s/m_z] (GgxAlpha::tiltX/Y) summed over every cell of its support box like
-// projectedArea: Σ_T 2g_T/|J_T| ∬_{s(T)} s/m_z d²s over the same kernel mass. The GGX fit stores the tilt of 2^ℓ blocks;
-// a footprint of a few texels leans as its own facets do, which this gives at (2σ+1)² cells of cost.
+// The footprint's mean tilt E_K[s/m_z] = ∫ K s/m_z dx / ∫ K dx (GgxAlpha::tiltX/Y) over every cell of its support box,
+// by the midpoint rule on sub-triangles (finer where σ is a few texels). The GGX fit stores the tilt of 2^ℓ blocks; a
+// footprint of a few texels leans as its own facets do, which this gives at (2σ+1)² cells of cost.
 Vec2d footprintTilt(const PndfManifold& m, const Footprint& fp);
 
 // Spec §4: G1 = cosθ / clamp(A, cosθ, 1), so G1 ∈ [cosθ, 1] ⊂ (0, 1] for ω_z > 0; 0 for ω_z <= 0.
