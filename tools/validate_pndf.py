@@ -51,10 +51,11 @@ CLUSTER_RUNS = [(1, 16), (4, 4)]  # (tiles, spp): tiles 4 is 16x the texels per 
 CLUSTER_CTS = [0.0, DEFAULT_CT, 10 * DEFAULT_CT, 100 * DEFAULT_CT]
 
 
-def material(method, kind, tiles=1, k=2.0, kernel="gaussian", ct=None):
+def material(method, kind, tiles=1, k=2.0, kernel="gaussian", ct=None, centre="sample"):
     gen = "generate:%s:%d:%d" % (kind, MAP_SIZE, MAP_SEED)
     if method == "pndf":
-        inp = dict(normal_map=gen, uv_scale=tiles, footprint_scale=k, kernel=kernel, **ALUMINIUM)
+        inp = dict(normal_map=gen, uv_scale=tiles, footprint_scale=k, kernel=kernel, footprint_centre=centre,
+                   **ALUMINIUM)
         if ct is not None:
             inp["cluster_threshold"] = ct
         return {"nodes": {"g": {"type": "bsdf.glint_pndf", "inputs": inp}}, "output": "@g.bsdf"}
@@ -137,7 +138,13 @@ def main():
                  ("pndf", "P-NDF k 2 gaussian (default)", dict(method="pndf"), SPP),
                  ("pndf_hi", "P-NDF k 2 gaussian (default)", dict(method="pndf"), bias_spp),
                  ("pndf_box1", "P-NDF k 1 box", dict(method="pndf", k=1.0, kernel="box"), SPP),
-                 ("pndf_box1_hi", "P-NDF k 1 box", dict(method="pndf", k=1.0, kernel="box"), bias_spp)]
+                 ("pndf_box1_hi", "P-NDF k 1 box", dict(method="pndf", k=1.0, kernel="box"), bias_spp),
+                 # the kernel centred on the pixel, not on each sample (footprint_centre "pixel"): not convolved with
+                 # the pixel filter, so k 1 box is the box-filtered surface the reference converges to
+                 ("pndf_pix", "P-NDF k 1 box, kernel on the pixel centre",
+                  dict(method="pndf", k=1.0, kernel="box", centre="pixel"), SPP),
+                 ("pndf_pix_hi", "P-NDF k 1 box, kernel on the pixel centre",
+                  dict(method="pndf", k=1.0, kernel="box", centre="pixel"), bias_spp)]
         for key, label, kw, spp in tests:
             meth = kw.pop("method")
             path, secs = run.render(f"{kind}_{key}", scene(meth, kind, w, h, spp, TEST_SEED, **kw))
@@ -152,7 +159,7 @@ def main():
                                                              kernel="box"))
         M["pndf_center"] = dict(run.compare(path, ref), seconds=secs, spp=1,
                                 label="P-NDF k 1 box, 1 spp at the pixel centre")
-        for key in ("pndf", "pndf_box1"):
+        for key in ("pndf", "pndf_box1", "pndf_pix"):
             M[key]["bias"] = bias_floor(M[key]["rmse"], SPP, M[key + "_hi"]["rmse"], bias_spp)
         # the reference's own noise, from normal mapping at 64 spp: e² = v/64 + v/ref_spp
         M["ref_noise"] = M["nm"]["rmse"] * math.sqrt((1 / ref_spp) / (1 / SPP + 1 / ref_spp))
@@ -298,7 +305,7 @@ def write_page(R):
     for kind in MAPS:
         M = R["maps"][kind]
         base = M["nm"]["rmse"]
-        for key in ("nm", "nm_eqtime", "pndf", "pndf_box1", "pndf_center"):
+        for key in ("nm", "nm_eqtime", "pndf", "pndf_box1", "pndf_pix", "pndf_center"):
             r = M[key]
             bias = f(r["bias"]) if "bias" in r else ""
             rows.append("| %s | %s | %d | %s | %s | %.3f | **%.3f** | %s | %.2f |" % (

@@ -241,6 +241,7 @@ ShadingPoint Accel::shadingPoint(const RayDifferential& ray, const Hit& hit) con
             sp.dwodx = -(glm::normalize(ray.rxDirection) - dn);
             sp.dwody = -(glm::normalize(ray.ryDirection) - dn);
             sp.differentialScale = Vec2(ray.differentialScale);
+            sp.pixelOffset = ray.pixelOffset;
             sp.hasDifferentials = true;
         }
     }

@@ -19,6 +19,9 @@ struct RayDifferential : Ray {
     Vec3 rxDirection{0.f}, ryDirection{0.f};
     // The factor the differentials were shrunk by (1 = one pixel step): per-pixel quantities divide by it.
     float differentialScale = 1.f;
+    // Camera rays: the sample's raster offset from its pixel centre, in pixels (the pixel filter's draw); 0 for every
+    // other ray. Lets a footprint filter centre its kernel on the pixel rather than on the sample (bsdf.glint_pndf).
+    Vec2 pixelOffset{0.f};
 
     // Shrinks the differentials to the footprint of one of several samples per pixel.
     void scaleDifferentials(float s) {

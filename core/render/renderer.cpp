@@ -111,6 +111,7 @@ RenderOutput renderScene(const Scene& scene, const RenderOptions& options) {
                     Vec2 uLens = sampler.get2D();
                     RayDifferential ray = camera.generateRay(x + 0.5f + off.x, y + 0.5f + off.y, uLens);
                     ray.scaleDifferentials(diffScale);
+                    ray.pixelOffset = off;
                     QuadRays quad;
                     if (rs.derivatives == DerivativeMode::Quad) {
                         // Partners in the aligned 2×2 quad (absolute pixel coordinates), same sub-pixel offset and lens

@@ -32,6 +32,10 @@ struct ShadingPoint {
     // differentials; 1 for quad differences): a per-pixel quantity, e.g. the glint LOD footprint, which must not change
     // with spp, is the differential divided by it (pixel bindings, GeomBinding::PixelDUVDX ...).
     Vec2 differentialScale{1.f, 1.f};
+    // Camera hits: the sample's offset from its pixel centre in pixels (RayDifferential::pixelOffset), so uv at the
+    // pixel centre is uv - duvdx/differentialScale.x · offset.x - duvdy/differentialScale.y · offset.y; 0 elsewhere
+    // (secondary vertices, tools). On a GPU a fragment is at its pixel centre: 0.
+    Vec2 pixelOffset{0.f};
 
     // Render setting "derivatives": "quad" (filtered-ggx.md §5.2): this pixel's partners in its aligned 2×2 quad along
     // screen x ([0]) and y ([1]), shaded at their own pixel centres; the differentials above then hold the fine

@@ -159,6 +159,34 @@ TEST(GlintPndfNode, FootprintIsOnePixelStepAtAnySpp) {
     EXPECT_GT(nonZero, 0);
 }
 
+TEST(GlintPndfNode, PixelCentredFootprintIgnoresTheSampleOffset) {
+    // Two samples of one pixel: uv = uv_centre + duvdx·offset.x + duvdy·offset.y. With footprint_centre "pixel" both
+    // centre the kernel on uv_centre; with "sample" (default) each on its own uv.
+    const Vec3 wo(0, 0, 1);
+    auto centreOf = [&](const char* mode, Vec2 offset) {
+        auto m = pndfMaterial({{"footprint_centre", mode}});
+        ShadingPoint sp = pixelPoint(wo, 6.0);
+        sp.pixelOffset = offset;
+        sp.uv += sp.duvdx * offset.x + sp.duvdy * offset.y;
+        ScratchArena arena;
+        Closure cl;
+        m->shade(sp, arena, cl);
+        LobeParameters p;
+        cl.lobe(0)->parameters(LobeQuery{wo, wo}, p);
+        for (auto& [name, v] : p)
+            if (name == "footprint_centre_texels") return Vec2(float(v[0]), float(v[1]));
+        return Vec2(-1.f);
+    };
+    const Vec2 a = centreOf("pixel", Vec2(0.3f, -0.2f)), b = centreOf("pixel", Vec2(-0.4f, 0.45f));
+    EXPECT_NEAR(a.x, b.x, 1e-3f);
+    EXPECT_NEAR(a.y, b.y, 1e-3f);
+    EXPECT_NEAR(a.x, 0.37f * kMapSize, 1e-3f);  // the pixel centre's uv (0.37, 0.61)
+    EXPECT_NEAR(a.y, 0.61f * kMapSize, 1e-3f);
+    const Vec2 c = centreOf("sample", Vec2(0.3f, -0.2f));
+    EXPECT_NEAR(c.x, 0.37f * kMapSize + 0.3f * 6.f, 1e-3f);  // 6 texels per pixel step
+    EXPECT_NEAR(c.y, 0.61f * kMapSize - 0.2f * 6.f, 1e-3f);
+}
+
 TEST(GlintPndfNode, FootprintHalfWidthFollowsScaleTilesAndClamp) {
     const Vec3 wo(0, 0, 1);
     auto sigmaOf = [&](const json& in, double texels) {

@@ -2,7 +2,8 @@
 // LEAN-filtered GGX of the same normal map: texture.lean (anisotropic, repeat, full correlation) over a footprint with
 // the variance of the P-NDF kernel, then bsdf.ggx_filtered with filter none, A = diag(α²) + 2Σ in the frame of the LEAN
 // mean normal, Schlick F0 = F(0°) of the chosen Fresnel model. CPU twin: cpuSubstitute in glint_pndf.node.cpp.
-// The P-NDF-only inputs (kernel shape aside, cluster_threshold, jacobian_clamp, masking) have no effect here.
+// The P-NDF-only inputs (kernel shape aside, cluster_threshold, jacobian_clamp, masking) have no effect here, nor does
+// footprint_centre: a fragment is at its pixel centre.
 
 // glint_pndf.node.cpp leanFootprintScale: texture.lean averages ~one pixel step per derivative (std |duv|/√12); the
 // P-NDF kernel of half-width k|duv|/2 has std σ/3 (gaussian), σ/√3 (box), σ/2 (disk).
@@ -14,7 +15,8 @@ float spc_pndf_lean_scale(int kernel, float k) {
 }
 
 void spc_bsdf_glint_pndf(SpeculaClosureQuery q, SpeculaShadingInputs s, vec3 weight, int convention, vec2 uv, vec2 duvdx,
-                         vec2 duvdy, float uv_scale, float footprint_scale, int kernel, float cluster_threshold,
+                         vec2 duvdy, float uv_scale, float footprint_scale, int kernel, int footprint_centre,
+                         float cluster_threshold,
                          float jacobian_clamp, int masking, int fresnel, vec3 f0, float ior, vec3 eta, vec3 k,
                          vec3 normal, vec3 tangent, float sign_, sampler2D moments, sampler2D ltc_matrix,
                          sampler2D ltc_amplitude, sampler2D ltc_anisotropic, out SpeculaClosure bsdf) {

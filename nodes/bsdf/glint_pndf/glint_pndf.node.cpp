@@ -27,12 +27,14 @@ namespace {
 
 enum class PndfKernel : int { Gaussian, Box, Disk };
 enum class PndfMasking : int { GgxFit, Analytic };
+enum class PndfFootprintCentre : int { Sample, Pixel };
 
 }  // namespace
 }  // namespace specula::nodes
 
 SPECULA_ENUM(specula::nodes::PndfKernel, "SPC_PNDF_KERNEL", "gaussian", "box", "disk");
 SPECULA_ENUM(specula::nodes::PndfMasking, "SPC_PNDF_MASKING", "ggx_fit", "analytic");
+SPECULA_ENUM(specula::nodes::PndfFootprintCentre, "SPC_PNDF_FOOTPRINT_CENTRE", "sample", "pixel");
 
 namespace specula::nodes {
 namespace {
@@ -45,6 +47,7 @@ struct Params {
     Vec2 uv, duvdx, duvdy;
     float uvScale, footprintScale;
     PndfKernel kernel;
+    PndfFootprintCentre footprintCentre;
     float clusterThreshold, jacobianClamp;
     PndfMasking masking;
     FresnelModel fresnel;
@@ -73,6 +76,10 @@ NodeParams<Params> declare() {
            "k: the kernel half-width is k (|du/dx| + |du/dy|)/2 in texels, clamped to [1, 128] (spec §1); 2 = one pixel "
            "each side").range(0.5f, 8.f).hard(1e-3f, 1e6f)
         .choice("kernel", &Params::kernel, "footprint kernel: gaussian (std = half-width/3), box or disk").uniform()
+        .choice("footprint_centre", &Params::footprintCentre,
+                "where the kernel is centred: sample (each sample's uv: the kernel is convolved with the pixel "
+                "filter) or pixel (the pixel centre's uv, from the sample's offset: every sample of a pixel sees one "
+                "footprint, so with kernel box and k = 1 the pixel converges to the box-filtered surface)").uniform()
         .f("cluster_threshold", &Params::clusterThreshold, float(kDefaultClusterThreshold),
            "eps_c of the cluster cut (spec §3.2, true fit residual); 0 = exact").range(0.f, 0.01f).hard(0.f, 1e6f).uniform()
         .f("jacobian_clamp", &Params::jacobianClamp, float(kDefaultJacobianClamp),
@@ -158,7 +165,11 @@ void cpu(EvalContext& c, const Instr& i) {
     const double k = std::max(double(p.footprintScale), 0.0);
     const double sigmaU = footprintHalfWidth(p.duvdx.x, p.duvdy.x, k, double(m.width()) * tiles);
     const double sigmaV = footprintHalfWidth(p.duvdx.y, p.duvdy.y, k, double(m.height()) * tiles);
-    lp.footprint = Footprint::fromUv(p.uv, tiles, m.width(), m.height(), sigmaU, sigmaV, kernelOf(p.kernel));
+    // The kernel's centre: the sample's uv, or the pixel centre's, one pixel step per unit of the sample's offset back.
+    Vec2 centre = p.uv;
+    if (p.footprintCentre == PndfFootprintCentre::Pixel && c.sp)
+        centre -= p.duvdx * c.sp->pixelOffset.x + p.duvdy * c.sp->pixelOffset.y;
+    lp.footprint = Footprint::fromUv(centre, tiles, m.width(), m.height(), sigmaU, sigmaV, kernelOf(p.kernel));
     lp.clusterThreshold = std::max(double(p.clusterThreshold), 0.0);
     lp.masking = p.masking == PndfMasking::Analytic ? MaskingModel::Analytic : MaskingModel::GgxFit;
     lp.ggxFit = d->ggxFit.get();
