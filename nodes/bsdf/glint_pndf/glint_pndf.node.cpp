@@ -76,10 +76,7 @@ NodeParams<Params> declare() {
            "k: the kernel half-width is k (|du/dx| + |du/dy|)/2 in texels, clamped to [1, 128] (spec §1); 2 = one pixel "
            "each side").range(0.5f, 8.f).hard(1e-3f, 1e6f)
         .choice("kernel", &Params::kernel, "footprint kernel: gaussian (std = half-width/3), box or disk").uniform()
-        .choice("footprint_centre", &Params::footprintCentre,
-                "where the kernel is centred: sample (each sample's uv: the kernel is convolved with the pixel "
-                "filter) or pixel (the pixel centre's uv, from the sample's offset: every sample of a pixel sees one "
-                "footprint, so with kernel box and k = 1 the pixel converges to the box-filtered surface)").uniform()
+
         .f("cluster_threshold", &Params::clusterThreshold, float(kDefaultClusterThreshold),
            "eps_c of the cluster cut (spec §3.2, true fit residual); 0 = exact").range(0.f, 0.01f).hard(0.f, 1e6f).uniform()
         .f("jacobian_clamp", &Params::jacobianClamp, float(kDefaultJacobianClamp),
@@ -90,7 +87,11 @@ NodeParams<Params> declare() {
     fresnelPorts(l, Vec3(0.95f));
     l.n3("normal", &Params::normal, Vec3(0, 0, 1), "shading normal of the unperturbed surface").bind(GeomBinding::N)
         .v3("tangent", &Params::tangent, Vec3(1, 0, 0), "tangent (+u)").bind(GeomBinding::T)
-        .f("sign", &Params::sign, 1.f, "bitangent sign (+v = sign N x T)").range(-1.f, 1.f).bind(GeomBinding::TSign);
+        .f("sign", &Params::sign, 1.f, "bitangent sign (+v = sign N x T)").range(-1.f, 1.f).bind(GeomBinding::TSign)
+        .choice("footprint_centre", &Params::footprintCentre,
+                "where the kernel is centred: sample (each sample's uv: the kernel is convolved with the pixel "
+                "filter) or pixel (the pixel centre's uv, from the sample's offset: every sample of a pixel sees one "
+                "footprint, so with kernel box and k = 1 the pixel converges to the box-filtered surface)").uniform();
     return l;
 }
 const NodeParams<Params> kParams = declare();

@@ -372,46 +372,6 @@ inline void blockOffset(int br, int bc, int k, int& oy, int& ox) {
 }
 }  // namespace
 
-double projectedArea(const PndfManifold& m, const Footprint& fp, const Vec3& w, const ProjectedAreaOptions& opt,
-                     ProjectedAreaStats* stats) {
-    if (stats) *stats = {};
-    if (!(w.z > 0)) return 0.0;
-    const Dir dir = makeDir(w);
-    const IndexRange r = footprintRange(fp, 0);
-    const long rows = long(r.rowHi) - r.rowLo + 1, cols = long(r.colHi) - r.colLo + 1;
-    int k = 1;
-    if (opt.maxCells > 0 && rows * cols > opt.maxCells)
-        k = int(std::ceil(std::sqrt(double(rows * cols) / double(opt.maxCells))));
-    double num = 0, den = 0;
-    long cells = 0;
-    for (long br = 0; br * k < rows; ++br)
-        for (long bc = 0; bc * k < cols; ++bc) {
-            int oy = 0, ox = 0;
-            if (k > 1) blockOffset(int(br), int(bc), k, oy, ox);
-            const long lr = br * k + oy, lc = bc * k + ox;
-            if (lr >= rows || lc >= cols) continue;  // the block's pick fell outside the range (edge blocks)
-            ManifoldTriangle tris[2];
-            m.cellTriangles(int(r.rowLo + lr), int(r.colLo + lc), tris);
-            ++cells;
-            for (const ManifoldTriangle& t : tris) {
-                const double g = triangleKernelMass(t, fp);
-                if (!(g > 0)) continue;
-                // Π_T/|J_T| is the texel-area integral per unit triangle parameter; dividing the kernel mass g by the
-                // triangle's texel area (xArea/2) and multiplying by xArea turns it into 2g/|J|.
-                const double weight = 2.0 * g / std::abs(t.jacobian);
-                const TriGeom geom = prepare(t);
-                num += weight * projectedAreaOf(geom, dir);
-                den += weight * geom.area;
-            }
-        }
-    if (stats) {
-        stats->kernelMass = den;
-        stats->cellsIntegrated = cells;
-        stats->stride = k;
-    }
-    return den > 0 ? num / den : dir.c;
-}
-
 namespace {
 // The n² affine sub-triangles of t (the same map restricted to a uniform split of its parameter simplex): upright
 // ones at (i, j)/n with steps (1/n, 0), (0, 1/n), inverted ones at (i + 1, j + 1)/n with steps (-1/n, 0), (0, -1/n).
@@ -444,6 +404,54 @@ void forEachSubTriangle(const ManifoldTriangle& t, int n, F f) {
 }
 }  // namespace
 
+double projectedArea(const PndfManifold& m, const Footprint& fp, const Vec3& w, const ProjectedAreaOptions& opt,
+                     ProjectedAreaStats* stats) {
+    if (stats) *stats = {};
+    if (!(w.z > 0)) return 0.0;
+    const Dir dir = makeDir(w);
+    const IndexRange r = footprintRange(fp, 0);
+    const long rows = long(r.rowHi) - r.rowLo + 1, cols = long(r.colHi) - r.colLo + 1;
+    int k = 1;
+    if (opt.maxCells > 0 && rows * cols > opt.maxCells)
+        k = int(std::ceil(std::sqrt(double(rows * cols) / double(opt.maxCells))));
+    // The kernel is held constant over each (sub-)triangle: at σ of a few texels it varies within a texel, and a
+    // triangle's mass times its mean visible area misses how they correlate (the lobe's albedo then exceeds 1 by up to
+    // ~2 % at grazing, σ = 1); n² sub-triangles per triangle where σ < 3 (as footprintTilt).
+    const int subdivisions = std::clamp(int(std::ceil(3.0 / std::min(fp.sigmaU, fp.sigmaV))), 1, 3);
+    double num = 0, den = 0;
+    long cells = 0;
+    for (long br = 0; br * k < rows; ++br)
+        for (long bc = 0; bc * k < cols; ++bc) {
+            int oy = 0, ox = 0;
+            if (k > 1) blockOffset(int(br), int(bc), k, oy, ox);
+            const long lr = br * k + oy, lc = bc * k + ox;
+            if (lr >= rows || lc >= cols) continue;  // the block's pick fell outside the range (edge blocks)
+            ManifoldTriangle tris[2];
+            m.cellTriangles(int(r.rowLo + lr), int(r.colLo + lc), tris);
+            ++cells;
+            for (const ManifoldTriangle& whole : tris)
+                // A replaced triangle's normals span the clamp's equilateral triangle E (circumradius 6e-4) around
+                // one normal: not subdivided, so E keeps its centroid and a flat map keeps Ā = cosθ exactly.
+                forEachSubTriangle(whole, whole.replaced ? 1 : subdivisions, [&](const ManifoldTriangle& t) {
+                    const double g = triangleKernelMass(t, fp);
+                    if (!(g > 0)) return;
+                    // Π_T/|J_T| is the texel-area integral per unit triangle parameter; dividing the kernel mass g by
+                    // the triangle's texel area (xArea/2) and multiplying by xArea turns it into 2g/|J|.
+                    const double weight = 2.0 * g / std::abs(t.jacobian);
+                    const TriGeom geom = prepare(t);
+                    num += weight * projectedAreaOf(geom, dir);
+                    den += weight * geom.area;
+                });
+        }
+    if (stats) {
+        stats->kernelMass = den;
+        stats->cellsIntegrated = cells;
+        stats->stride = k;
+    }
+    return den > 0 ? num / den : dir.c;
+}
+
+
 Vec2d footprintTilt(const PndfManifold& m, const Footprint& fp) {
     const IndexRange r = footprintRange(fp, 0);
     // The kernel varies within a texel at σ of a few texels, so each triangle is split into n² sub-triangles and the
@@ -457,7 +465,7 @@ Vec2d footprintTilt(const PndfManifold& m, const Footprint& fp) {
             ManifoldTriangle tris[2];
             m.cellTriangles(row, col, tris);
             for (const ManifoldTriangle& whole : tris)
-                forEachSubTriangle(whole, n, [&](const ManifoldTriangle& t) {
+                forEachSubTriangle(whole, whole.replaced ? 1 : n, [&](const ManifoldTriangle& t) {
                     const double cx = t.xOrigin.x + (t.xStep1.x + t.xStep2.x) / 3.0;
                     const double cy = t.xOrigin.y + (t.xStep1.y + t.xStep2.y) / 3.0;
                     const double g = gaussian ? kernelWeight(fp, cx - fp.centreX, cy - fp.centreY) * 0.5 * t.xArea
