@@ -79,4 +79,8 @@ double integrateOverRect(const PndfManifold& m, const Footprint& fp, double x0, 
     return sum * hx * hy;
 }
 
+inline const char* kernelName(FootprintKernel k) {
+    return k == FootprintKernel::Gaussian ? "gaussian" : k == FootprintKernel::Box ? "box" : "disk";
+}
+
 }  // namespace specula::pndf::testing

@@ -21,10 +21,6 @@ using namespace specula::pndf::testing;
 
 namespace {
 
-const char* kernelName(FootprintKernel k) {
-    return k == FootprintKernel::Gaussian ? "gaussian" : k == FootprintKernel::Box ? "box" : "disk";
-}
-
 }  // namespace
 
 TEST(Pndf, ManifoldBuildAndBounds) {

@@ -22,10 +22,6 @@ using namespace specula::pndf::testing;
 
 namespace {
 
-const char* kernelName(FootprintKernel k) {
-    return k == FootprintKernel::Gaussian ? "gaussian" : k == FootprintKernel::Box ? "box" : "disk";
-}
-
 Vec3 direction(double thetaDeg, double phi) {
     const double t = thetaDeg * kPiD / 180;
     return Vec3(float(std::sin(t) * std::cos(phi)), float(std::sin(t) * std::sin(phi)), float(std::cos(t)));

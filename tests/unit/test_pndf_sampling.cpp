@@ -25,10 +25,6 @@ using namespace specula::pndf::testing;
 
 namespace {
 
-const char* kernelName(FootprintKernel k) {
-    return k == FootprintKernel::Gaussian ? "gaussian" : k == FootprintKernel::Box ? "box" : "disk";
-}
-
 // Uniform in [0,1) with 53 random bits: std::uniform_real_distribution may return 1 on some library versions.
 struct Uniform {
     std::mt19937_64 rng;

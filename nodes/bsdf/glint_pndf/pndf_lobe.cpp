@@ -45,6 +45,14 @@ double PndfLobe::maskingG1(const Vec3& w) const {
     return smithG1Analytic(*p_.manifold, p_.footprint, v, opt);
 }
 
+double PndfLobe::maskingG1Wo(const Vec3& wo) const {
+    if (memoG1_ < 0.0 || memoWo_ != wo) {
+        memoWo_ = wo;
+        memoG1_ = maskingG1(wo);
+    }
+    return memoG1_;
+}
+
 LobeValue PndfLobe::evalPdf(const LobeQuery& q) const {
     LobeValue v;
     const Vec3& wo = q.wo;
@@ -58,11 +66,7 @@ LobeValue PndfLobe::evalPdf(const LobeQuery& q) const {
     const double d = ndf(h);
     if (!(d * h.z >= kNdfFloor)) return v;
     const double woh = std::max(double(glm::dot(wo, h)), 1e-8);
-    if (memoG1_ < 0.0 || memoWo_ != wo) {
-        memoWo_ = wo;
-        memoG1_ = maskingG1(wo);
-    }
-    const double g = memoG1_ * maskingG1(wi);
+    const double g = maskingG1Wo(wo) * maskingG1(wi);
     // f·cosθi = F G D / (4 cosθo) (spec §5); pdf(wi) = D cosθ_h / (4 wo·h) (spec §2.4).
     v.f = p_.fresnel.eval(float(woh)) * float(g * d / (4.0 * double(wo.z)));
     v.pdf = float(d * double(h.z) / (4.0 * woh));
@@ -88,11 +92,7 @@ Color3 PndfLobe::albedo(const Vec3& wo) const {
     // Lobe selection only: a conductor-like lobe reflects about F(θo) G1(θo) of what arrives (no energy is lost to a
     // second lobe inside it); G1 is the memoised masking of wo.
     if (wo.z <= 0.f) return Color3(0.f);
-    if (memoG1_ < 0.0 || memoWo_ != wo) {
-        memoWo_ = wo;
-        memoG1_ = maskingG1(wo);
-    }
-    return p_.fresnel.eval(wo.z) * float(memoG1_);
+    return p_.fresnel.eval(wo.z) * float(maskingG1Wo(wo));
 }
 
 void PndfLobe::parameters(const LobeQuery& q, LobeParameters& out) const {

@@ -45,6 +45,8 @@ public:
     double maskingG1(const Vec3& w) const;
 
 private:
+    double maskingG1Wo(const Vec3& wo) const;  // maskingG1(wo) through the memo below
+
     PndfLobeParams p_;
     GgxAlpha alpha_{};  // the GGX fit's footprint roughness (MaskingModel::GgxFit), looked up once
     // G1(wo) memo: a path vertex asks one wo many times (each light, the BSDF sample); the analytic area is costly.
