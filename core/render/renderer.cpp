@@ -106,6 +106,12 @@ RenderOutput renderScene(const Scene& scene, const RenderOptions& options) {
             for (int x = tx0; x < tx1; ++x) {
                 Accum acc;
                 for (int s = 0; s < rs.spp; ++s) {
+                    // Checked every 32 samples, not per row: at high spp one row of a tile is seconds of work, and
+                    // hosts promise that cancel stops a render within a second. An unfinished pixel stays 0.
+                    if ((s & 31) == 31 && options.cancel && options.cancel->load(std::memory_order_relaxed)) {
+                        cancelled = true;
+                        return;
+                    }
                     PixelSampler sampler(uint32_t(x), uint32_t(y), uint32_t(s), rs.seed);
                     Vec2 off = filterOffset(rs, sampler.get2D());
                     Vec2 uLens = sampler.get2D();

@@ -103,7 +103,7 @@ public:
     ~RenderJob();
     RenderJob(RenderJob&&) noexcept;
     RenderJob& operator=(RenderJob&&) noexcept;
-    void cancel();           // asynchronous: the workers stop at the next pixel row
+    void cancel();           // asynchronous: the workers stop within 32 samples of their current pixel
     bool done() const;
     RenderResult wait();     // blocks; once. Rethrows an error of the render as Error.
 

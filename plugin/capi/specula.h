@@ -143,7 +143,7 @@ SPC_API spc_status spc_render(spc_context* ctx, const spc_scene* scene, const sp
 /* Starts a render on its own thread: *out = the job. The scene must not be edited until the job is waited for. */
 SPC_API spc_status spc_render_async(spc_context* ctx, spc_scene* scene, const spc_render_options* opts,
                                     spc_progress_fn cb, void* user, spc_job** out);
-/* Asks the job to stop (workers stop at their next pixel row); from any thread, also from the callback. */
+/* Asks the job to stop (workers stop within 32 samples of their current pixel); from any thread, also from the callback. */
 SPC_API spc_status spc_job_cancel(spc_job* job);
 /* *out_done = 1 once the render has finished (waiting will not block). */
 SPC_API spc_status spc_job_done(const spc_job* job, int* out_done);
