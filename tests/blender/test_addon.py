@@ -310,6 +310,19 @@ for blender_pass, ours in (("Diffuse", ("diffuse.R", "diffuse.G", "diffuse.B")),
 depth = read_exr(addon_exr, ("ViewLayer.Depth.Z",))[30, 40, 0]
 check("Depth at the image centre is the sphere's front (5 - 1 = 4)", abs(depth - 4.0) < 0.01, str(depth))
 
+# A border render is a --crop: the same pixels inside the border, nothing outside it.
+scene.render.use_border, scene.render.use_crop_to_border = True, False
+scene.render.border_min_x, scene.render.border_max_x = 0.25, 0.75
+scene.render.border_min_y, scene.render.border_max_y = 0.5, 1.0     # Blender's y is up: the top half
+border_exr = os.path.join(OUT_DIR, "border_addon.exr")
+render_to(border_exr, "SPECULA")
+scene.render.use_border = False
+c = read_exr(border_exr, COMBINED)
+check("border render: the top-middle block equals the full render, the rest is empty",
+      c.shape == a.shape and float(np.abs(c[0:30, 20:60] - a[0:30, 20:60]).max()) == 0.0
+      and float(np.abs(c[30:]).max()) == 0.0 and float(np.abs(c[:, :20]).max()) == 0.0,
+      "max |diff| inside %g" % float(np.abs(c[0:30, 20:60] - a[0:30, 20:60]).max()))
+
 # ---- 5. cancel mid-render --------------------------------------------------------------------------------------
 scene.specula.samples = 100000
 scene.render.resolution_x, scene.render.resolution_y = 256, 256

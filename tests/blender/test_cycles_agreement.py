@@ -32,6 +32,7 @@ specula = enable_addon()
 scene = bpy.context.scene
 scene.specula.samples = SPP
 scene.specula.max_bounces = 8
+scene.specula.clamp_indirect = 0.0
 specula_exr = os.path.join(OUT_DIR, "anchor_specula.exr")
 t_specula = render_to(specula_exr, "SPECULA")
 info = specula.engine.last_render

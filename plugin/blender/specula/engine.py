@@ -189,9 +189,9 @@ class SpeculaRenderEngine(bpy.types.RenderEngine):
         return (x0, y0, x1, y1)
 
     def _load(self, exr, width, height, crop, view_layer):
-        if crop:
+        if crop:   # a border render's result is the border itself; Blender places it in the frame
             x0, y0, x1, y1 = crop
-            x, y, w, h = x0, height - y1, x1 - x0, y1 - y0   # Blender's result origin is bottom-left
+            x, y, w, h = 0, 0, x1 - x0, y1 - y0
         else:
             x, y, w, h = 0, 0, width, height
         try:
