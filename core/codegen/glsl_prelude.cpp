@@ -14,7 +14,8 @@ const float SPC_PI = 3.14159265358979323846;
 const float SPC_INV_PI = 0.31830988618379067154;
 
 // Everything a node may read about the shading point. Fill it with specula_shading_inputs() in a
-// fragment shader (derivatives from dFdx/dFdy), or set the fields directly (e.g. from a ray tracer).
+// fragment shader (derivatives from dFdxFine/dFdyFine: the CPU's "quad" mode differences the same 2x2 pixel quads),
+// or set the fields directly (e.g. from a ray tracer).
 // All vectors are world space; normal, geometric_normal and tangent.xyz must be unit length.
 struct SpeculaShadingInputs {
     vec3 position;          // P
@@ -81,12 +82,14 @@ SpeculaClosureQuery specula_polygon_query(vec3 wo, vec3 p0, vec3 p1, vec3 p2, ve
 // radiance; partial = some lobe could not answer a polygon query (the host samples the closure for that light).
 struct SpeculaClosure {
     vec3 f;
+    vec3 f_diffuse;  // the part of f from diffuse lobes (CPU: BsdfEval::diffuse), for the diffuse/specular AOVs
     vec3 emission;
     bool partial;
 };
 SpeculaClosure spc_closure_none() {
     SpeculaClosure c;
     c.f = vec3(0.0);
+    c.f_diffuse = vec3(0.0);
     c.emission = vec3(0.0);
     c.partial = false;
     return c;
@@ -99,12 +102,12 @@ SpeculaShadingInputs specula_shading_inputs(vec3 P, vec3 N, vec3 Ng, vec4 T, vec
     s.geometric_normal = normalize(Ng);
     s.tangent = vec4(normalize(T.xyz), T.w < 0.0 ? -1.0 : 1.0);
     s.uv = uv;
-    s.dPdx = dFdx(P);
-    s.dPdy = dFdy(P);
-    s.duvdx = dFdx(uv);
-    s.duvdy = dFdy(uv);
-    s.dNdx = dFdx(s.normal);
-    s.dNdy = dFdy(s.normal);
+    s.dPdx = dFdxFine(P);
+    s.dPdy = dFdyFine(P);
+    s.duvdx = dFdxFine(uv);
+    s.duvdy = dFdyFine(uv);
+    s.dNdx = dFdxFine(s.normal);
+    s.dNdy = dFdyFine(s.normal);
     s.dwodx = vec3(0.0);
     s.dwody = vec3(0.0);
     return s;
@@ -112,8 +115,8 @@ SpeculaShadingInputs specula_shading_inputs(vec3 P, vec3 N, vec3 Ng, vec4 T, vec
 // The same with the view direction wo (unit, towards the viewer), whose screen derivatives filtered lobes use.
 SpeculaShadingInputs specula_shading_inputs(vec3 P, vec3 N, vec3 Ng, vec4 T, vec2 uv, vec3 wo) {
     SpeculaShadingInputs s = specula_shading_inputs(P, N, Ng, T, uv);
-    s.dwodx = dFdx(wo);
-    s.dwody = dFdy(wo);
+    s.dwodx = dFdxFine(wo);
+    s.dwody = dFdyFine(wo);
     return s;
 }
 

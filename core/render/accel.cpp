@@ -129,6 +129,28 @@ static Vec3 transformNormalDerivative(const Mat3& m, const Vec3& n, const Vec3& 
     return (mdn - nw * glm::dot(nw, mdn)) / len;
 }
 
+bool Accel::extrapolate(const Ray& ray, const Hit& on, Hit& out) const {
+    const TriangleMesh& m = scene_.shapes[on.shape].mesh;
+    const glm::uvec3 idx = m.indices[on.prim];
+    const Vec3 p0 = m.positions[idx.x], e1 = m.positions[idx.y] - p0, e2 = m.positions[idx.z] - p0;
+    const Vec3 n = glm::cross(e1, e2);
+    const float den = glm::dot(ray.d, n);
+    if (std::abs(den) <= 1e-20f) return false;
+    const float t = glm::dot(p0 - ray.o, n) / den;
+    if (!(t > 0.f)) return false;
+    // Barycentrics of the plane point in the triangle's own (possibly extrapolated) affine frame.
+    const Vec3 d = ray.o + t * ray.d - p0;
+    const float d00 = glm::dot(e1, e1), d01 = glm::dot(e1, e2), d11 = glm::dot(e2, e2);
+    const float d20 = glm::dot(d, e1), d21 = glm::dot(d, e2);
+    const float det = d00 * d11 - d01 * d01;
+    if (!(std::abs(det) > 0.f)) return false;
+    out = on;
+    out.t = t;
+    out.b1 = (d11 * d20 - d01 * d21) / det;
+    out.b2 = (d00 * d21 - d01 * d20) / det;
+    return true;
+}
+
 ShadingPoint Accel::shadingPoint(const RayDifferential& ray, const Hit& hit) const {
     const ShapeInstance& sh = scene_.shapes[hit.shape];
     const TriangleMesh& m = sh.mesh;

@@ -31,6 +31,10 @@ public:
     // duv, dn and dwo (pbrt-v4 SurfaceInteraction::ComputeDifferentials). The geometric and shading
     // normals are flipped to face the ray's origin side.
     ShadingPoint shadingPoint(const RayDifferential& ray, const Hit& hit) const;
+    // The ray against the plane of triangle (on.shape, on.prim), with barycentrics extrapolated beyond the triangle:
+    // what a GPU helper invocation of that triangle computes for a neighbouring pixel of its 2x2 quad. False when
+    // the ray is parallel to the plane or meets it behind the origin.
+    bool extrapolate(const Ray& ray, const Hit& on, Hit& out) const;
 
 private:
     struct Impl;

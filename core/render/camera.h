@@ -31,6 +31,10 @@ public:
 
     const Vec3& position() const { return pos_; }
     const Vec3& forward() const { return forward_; }
+    const Vec3& right() const { return right_; }
+    const Vec3& up() const { return upv_; }      // the image's up (right x forward)
+    float halfWidth() const { return halfW_; }   // image-plane half extents at distance 1
+    float halfHeight() const { return halfH_; }
     const CameraDesc& desc() const { return desc_; }
     int width() const { return width_; }
     int height() const { return height_; }

@@ -16,6 +16,7 @@ Integrator::Integrator(const Scene& scene, const Accel& accel)
     : scene_(scene),
       accel_(accel),
       path_(scene.render.integrator == IntegratorKind::Path),
+      raster_(scene.render.integrator == IntegratorKind::Raster),
       maxDepth_(scene.render.integrator == IntegratorKind::Path ? scene.render.maxDepth : 0),
       dimsPerBounce_(uint32_t(2 * scene.lights.size() + 4)),
       camera_(scene.camera, scene.render.width, scene.render.height),
@@ -127,7 +128,11 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
             for (int k = 0; k < 2; ++k) {
                 ShadingPoint::QuadNeighbour& nb = sp.quad[k];
                 Hit hn;
-                if (!accel_.intersect(quad->ray[k], hn) || scene_.shapes[hn.shape].areaLight >= 0) continue;
+                // Raster: the partner is a helper invocation of this pixel's triangle (its plane, extrapolated),
+                // as on a GPU; otherwise the partner's own hit.
+                if (raster_ ? !accel_.extrapolate(quad->ray[k], hit, hn)
+                            : (!accel_.intersect(quad->ray[k], hn) || scene_.shapes[hn.shape].areaLight >= 0))
+                    continue;
                 ShadingPoint spn = accel_.shadingPoint(quad->ray[k], hn);
                 Closure partner;
                 scene_.materials[scene_.shapes[spn.shapeId].material]->shade(spn, arena, partner);
@@ -166,6 +171,11 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
             out.normal = closure.dominantFrame(wo, sp.frame).n;
         }
         if (closure.empty()) break;
+        if (raster_) {
+            out.normal = sp.n;  // the GPU's normal AOV is the shading normal (it cannot see the lobes' frames)
+            rasterLighting(sp, closure, out);
+            break;
+        }
 
         // Next-event estimation: one sample of every light. For polygonal lights (render.area_lights = "ltc"), the
         // lobes with a closed-form polygon integral (BsdfLobe::integratePolygon, e.g. LTC lobes) are integrated
@@ -365,6 +375,89 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
     }
     out.beauty = emitted + out.diffuse + out.specular;
     return out;
+}
+
+// The GPU preview's light transport on the CPU (docs/preview.md): what plugin/preview's fragment shader computes, so
+// that the two agree image for image. Unshadowed; delta lights by one direction query; quad lights by the closure's
+// polygon integral (LTC), or, when a lobe has no closed form, by a direction query towards the light's centre times
+// its solid angle; an environment by its mean radiance times the polygon integral over the hemisphere of the shading
+// normal (the directional albedo of LTC lobes), or f(wi = N)·π when a lobe has no closed form.
+void Integrator::rasterLighting(const ShadingPoint& sp, const Closure& closure, SampleValue& out) const {
+    const Vec3 wo = sp.wo;
+    auto add = [&](const BsdfEval& f, const Color3& L) {
+        out.diffuse += f.diffuse * L;
+        out.specular += f.specular * L;
+    };
+    auto direction = [&](const Vec3& wi, float distance) {
+        BsdfQuery q;
+        q.wo = wo;
+        q.wi = wi;
+        q.lightDistance = distance;
+        return closure.evalPdf(q).f;
+    };
+    for (const auto& light : scene_.lights) {
+        const RasterLight r = light->raster();
+        switch (r.kind) {
+            case RasterLight::Kind::Point:
+            case RasterLight::Kind::Spot: {
+                Vec3 d = r.position - sp.p;
+                float d2 = glm::dot(d, d);
+                if (!(d2 > 0.f)) break;
+                float dist = std::sqrt(d2);
+                Vec3 wi = d / dist;
+                if (glm::dot(wi, sp.ng) <= 0.f) break;
+                float falloff = 1.f;
+                if (r.kind == RasterLight::Kind::Spot) falloff = rasterSpotFalloff(glm::dot(-wi, r.direction), r);
+                if (falloff <= 0.f) break;
+                add(direction(wi, dist), r.value * (falloff / d2));
+                break;
+            }
+            case RasterLight::Kind::Directional:
+                if (glm::dot(r.direction, sp.ng) > 0.f) add(direction(r.direction, std::numeric_limits<float>::infinity()), r.value);
+                break;
+            case RasterLight::Kind::Quad: {
+                Vec3 poly[4];
+                Color3 Lp;
+                int n = light->polygon(sp.p, poly, Lp);
+                if (n == 0) break;
+                for (int k = 0; k < n; ++k) poly[k] -= sp.p;
+                BsdfQuery q;
+                q.wo = wo;
+                q.polygonHorizon = scene_.render.ltcHorizon;
+                BsdfEval fa;
+                LobeMask analytic = closure.integratePolygon(q, poly, n, fa);
+                if ((closure.allLobes() & ~analytic) == 0) {
+                    add(fa, Lp);
+                    break;
+                }
+                Vec3 c = (poly[0] + poly[1] + poly[2] + poly[3]) * 0.25f;
+                float dist = glm::length(c);
+                Vec3 wi = c / dist;
+                Vec3 nl = glm::cross(r.direction, r.edgeV);
+                float area = glm::length(nl);
+                float solidAngle = area * std::abs(glm::dot(wi, nl / area)) / (dist * dist);
+                if (glm::dot(wi, sp.ng) > 0.f) add(direction(wi, std::numeric_limits<float>::infinity()), Lp * solidAngle);
+                break;
+            }
+            case RasterLight::Kind::Environment: {
+                if (maxComponent(r.value) <= 0.f) break;
+                const Vec3 t = sp.frame.t, b = sp.frame.b, nn = sp.frame.n;
+                const float eps = kRasterHemisphereLift;
+                Vec3 poly[4] = {glm::normalize(t + eps * nn), glm::normalize(b + eps * nn), glm::normalize(-t + eps * nn),
+                                glm::normalize(-b + eps * nn)};
+                BsdfQuery q;
+                q.wo = wo;
+                q.polygonHorizon = scene_.render.ltcHorizon;
+                BsdfEval fa;
+                LobeMask analytic = closure.integratePolygon(q, poly, 4, fa);
+                if ((closure.allLobes() & ~analytic) == 0)
+                    add(fa, r.value);
+                else
+                    add(direction(nn, std::numeric_limits<float>::infinity()), r.value * kPi);
+                break;
+            }
+        }
+    }
 }
 
 }  // namespace specula

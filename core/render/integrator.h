@@ -3,6 +3,7 @@
 #pragma once
 
 #include "core/render/camera.h"
+#include "core/render/lights.h"
 
 #include "core/render/accel.h"
 #include "core/render/bsdf.h"
@@ -28,6 +29,17 @@ struct QuadRays {
     float sign[2] = {1.f, 1.f};
 };
 
+// The preview's environment polygon: the hemisphere of the shading normal as a quad whose vertices sit this far
+// above the horizon (a polygon exactly on the horizon degenerates under clipping); it misses ~1e-4 of the cosine.
+inline constexpr float kRasterHemisphereLift = 0.01f;
+// Spot cone falloff shared by SpotLight::sample and the raster paths: smoothstep between the cone cosines.
+inline float rasterSpotFalloff(float cosAngle, const RasterLight& r) {
+    if (cosAngle >= r.cosInner) return 1.f;
+    if (cosAngle <= r.cosOuter) return 0.f;
+    float t = (cosAngle - r.cosOuter) / std::max(r.cosInner - r.cosOuter, 1e-6f);
+    return t * t * (3.f - 2.f * t);
+}
+
 class Integrator {
 public:
     Integrator(const Scene& scene, const Accel& accel);
@@ -39,9 +51,12 @@ public:
 private:
     // Radiance arriving from escaped rays (sum over environment lights).
     Color3 environment(const Vec3& dir) const;
+    // render.integrator "raster": the GPU preview's unshadowed direct lighting at a camera hit (docs/preview.md).
+    void rasterLighting(const ShadingPoint& sp, const Closure& closure, SampleValue& out) const;
     const Scene& scene_;
     const Accel& accel_;
     bool path_;
+    bool raster_;
     int maxDepth_;
     uint32_t dimsPerBounce_;
     PerspectiveCamera camera_;  // footprints of secondary vertices (PerspectiveCamera::approximateDpDxy)

@@ -196,3 +196,70 @@ Color3 EnvironmentLight::radiance(const Vec3& wi, bool) const {
 }
 
 }  // namespace specula
+
+// ---- raster descriptions (the GPU preview and the CPU "raster" integrator) ----------------------------
+namespace specula {
+
+RasterLight PointLight::raster() const {
+    RasterLight r;
+    r.kind = RasterLight::Kind::Point;
+    r.position = p_;
+    r.value = I_;
+    return r;
+}
+
+RasterLight SpotLight::raster() const {
+    RasterLight r;
+    r.kind = RasterLight::Kind::Spot;
+    r.position = p_;
+    r.direction = dir_;
+    r.value = I_;
+    r.cosOuter = cosOuter_;
+    r.cosInner = cosInner_;
+    return r;
+}
+
+RasterLight DirectionalLight::raster() const {
+    RasterLight r;
+    r.kind = RasterLight::Kind::Directional;
+    r.direction = toLight_;
+    r.value = E_;
+    return r;
+}
+
+RasterLight QuadLight::raster() const {
+    RasterLight r;
+    r.kind = RasterLight::Kind::Quad;
+    r.position = corner_;
+    r.direction = eu_;
+    r.edgeV = ev_;
+    r.value = L_;
+    r.twoSided = twoSided_;
+    return r;
+}
+
+RasterLight EnvironmentLight::raster() const {
+    RasterLight r;
+    r.kind = RasterLight::Kind::Environment;
+    r.value = constant_;
+    if (!rgb_.empty()) {
+        // Mean radiance over the sphere: texels weighted by their solid angle (∝ sin θ in the lat-long layout).
+        double sum[3] = {0, 0, 0}, weight = 0;
+        for (int y = 0; y < h_; ++y) {
+            double sinTheta = std::sin(kPi * (y + 0.5) / h_);
+            for (int x = 0; x < w_; ++x)
+                for (int c = 0; c < 3; ++c) sum[c] += sinTheta * rgb_[(size_t(y) * w_ + x) * 3 + c];
+            weight += sinTheta * w_;
+        }
+        r.value = Color3(float(sum[0] / weight), float(sum[1] / weight), float(sum[2] / weight)) * scale_;
+        r.hasMap = true;
+        r.map = rgb_.data();
+        r.mapWidth = w_;
+        r.mapHeight = h_;
+        r.mapRotation = rotation_;
+        r.mapScale = scale_;
+    }
+    return r;
+}
+
+}  // namespace specula

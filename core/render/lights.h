@@ -19,6 +19,25 @@ struct LightSample {
     bool delta = false;
 };
 
+// A light as a rasteriser sees it (the GPU preview and the CPU "raster" integrator that matches it): the parameters
+// of the closed-form light models, no sampling. Environment maps are described by their constant part only.
+struct RasterLight {
+    enum class Kind { Point, Spot, Directional, Quad, Environment } kind = Kind::Point;
+    Vec3 position{0.f};                // point, spot; quad: the corner
+    Vec3 direction{0.f, 0.f, -1.f};    // spot: cone axis; directional: towards the light; quad: edge u
+    Vec3 edgeV{0.f};                   // quad: edge v (emits on the side of cross(edgeU, edgeV), or both)
+    Color3 value{0.f};                 // W/sr (point, spot), W/m² (directional), W/(m²·sr) (quad, environment)
+    float cosOuter = -1.f, cosInner = -1.f;  // spot cone
+    bool twoSided = false;
+    bool hasMap = false;               // environment with an image (the rasteriser lights with its mean radiance)
+    // Environment map (hasMap): the lat-long texels (rows top to bottom, RGB), looked up by the nearest texel as
+    // EnvironmentLight::radiance does, times mapScale, the map turned by mapRotation (radians) about +z.
+    const float* map = nullptr;
+    int mapWidth = 0, mapHeight = 0;
+    float mapRotation = 0.f;
+    Color3 mapScale{1.f};
+};
+
 class Light {
 public:
     virtual ~Light() = default;
@@ -33,6 +52,7 @@ public:
     // Polygonal emitters: if p sees the emitting side, writes the polygon (world space, at most 4
     // vertices, counter-clockwise seen from p), its constant radiance, and returns the vertex count.
     virtual int polygon(const Vec3& p, Vec3* vertices, Color3& radiance) const { return 0; }
+    virtual RasterLight raster() const = 0;
     std::string name;
 };
 
@@ -41,6 +61,7 @@ public:
     PointLight(const Vec3& p, const Color3& intensity) : p_(p), I_(intensity) {}
     bool sample(const Vec3& p, const Vec2& u, LightSample& s) const override;
     bool isDelta() const override { return true; }
+    RasterLight raster() const override;
 
 private:
     Vec3 p_;
@@ -53,6 +74,7 @@ public:
     SpotLight(const Vec3& p, const Vec3& dir, float coneDegrees, float blend, const Color3& intensity);
     bool sample(const Vec3& p, const Vec2& u, LightSample& s) const override;
     bool isDelta() const override { return true; }
+    RasterLight raster() const override;
 
 private:
     Vec3 p_, dir_;
@@ -66,6 +88,7 @@ public:
         : toLight_(-glm::normalize(direction)), E_(irradiance) {}
     bool sample(const Vec3& p, const Vec2& u, LightSample& s) const override;
     bool isDelta() const override { return true; }
+    RasterLight raster() const override;
 
 private:
     Vec3 toLight_;
@@ -80,6 +103,7 @@ public:
     float pdf(const Vec3& p, const Vec3& wi, float t) const override;
     Color3 radiance(const Vec3& wi, bool frontSide) const override;
     int polygon(const Vec3& p, Vec3* vertices, Color3& radiance) const override;
+    RasterLight raster() const override;
     const Vec3& corner() const { return corner_; }
     const Vec3& edgeU() const { return eu_; }
     const Vec3& edgeV() const { return ev_; }
@@ -104,6 +128,7 @@ public:
     float pdf(const Vec3& p, const Vec3& wi, float t) const override;
     Color3 radiance(const Vec3& wi, bool frontSide) const override;
     bool isEnvironment() const override { return true; }
+    RasterLight raster() const override;  // the constant, or the map's solid-angle mean times the scale
 
 private:
     Vec2 dirToUv(const Vec3& d) const;

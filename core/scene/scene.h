@@ -17,7 +17,7 @@ namespace specula {
 class ColorConfig;
 class TextureStore;
 
-enum class IntegratorKind { Direct, Path };
+enum class IntegratorKind { Direct, Path, Raster };
 enum class PixelFilterKind { Box, Gaussian };
 // Screen-space derivatives of camera hits: "ray" = ray differentials (pbrt-v4); "quad" = emulated GPU 2×2-quad fine
 // finite differences (dFdxFine/dFdyFine) between pixel-centre hits, for like-for-like CPU/GLSL comparisons

@@ -60,8 +60,12 @@ void readRender(const Json& j, Scene& s) {
     rs.spp = r.integer("spp", rs.spp, 1, 1 << 20);
     rs.seed = uint64_t(r.integer("seed", 0, 0, 2147483647));
     rs.tile = r.integer("tile", rs.tile, 1, 1024);
-    rs.integrator = r.enumeration("integrator", "path", {"path", "direct"}) == "path" ? IntegratorKind::Path
-                                                                                     : IntegratorKind::Direct;
+    {
+        const std::string integrator = r.enumeration("integrator", "path", {"path", "direct", "raster"});
+        rs.integrator = integrator == "path"     ? IntegratorKind::Path
+                        : integrator == "direct" ? IntegratorKind::Direct
+                                                 : IntegratorKind::Raster;
+    }
     rs.maxDepth = r.integer("max_depth", rs.maxDepth, 0, 1024);
     rs.filter = r.enumeration("filter", "box", {"box", "gaussian"}) == "box" ? PixelFilterKind::Box
                                                                            : PixelFilterKind::Gaussian;
@@ -173,7 +177,10 @@ void readMaterials(const Json& j, Context& ctx) {
     for (auto it = j.begin(); it != j.end(); ++it) {
         std::string ptr = "/materials/" + pointerEscape(it.key());
         // Every material is a node graph (docs/graph-format.md), compiled once here.
-        auto m = loadGraphMaterial(it.value(), ptr, GraphLoadContext{ctx.scene->textures.get(), ctx.baseDir, &ctx.scene->warnings});
+        GraphLoadContext load{ctx.scene->textures.get(), ctx.baseDir, &ctx.scene->warnings};
+        // The raster integrator computes what the GPU does, so nodes the GPU runs as a substitute load it here too.
+        load.gpuSubstitutes = ctx.scene->render.integrator == IntegratorKind::Raster;
+        auto m = loadGraphMaterial(it.value(), ptr, load);
         m->setName(it.key());
         ctx.materials[it.key()] = int(ctx.scene->materials.size());
         ctx.scene->materials.push_back(std::move(m));
@@ -225,7 +232,9 @@ void readShape(const Json& j, const std::string& ptr, Context& ctx) {
         }
     }
     sh.mesh = std::move(b.mesh);
-    sh.surface = b.surface;
+    // The rasteriser shades the tessellation's interpolated attributes, so the raster integrator does too: built-in
+    // shapes lose their exact-surface projection there (docs/preview.md).
+    if (ctx.scene->render.integrator != IntegratorKind::Raster) sh.surface = b.surface;
     transformMesh(sh, readTransform(r));
     ctx.scene->shapes.push_back(std::move(sh));
 }
@@ -367,6 +376,7 @@ Scene loadSceneFromString(const std::string& text, const std::string& baseDir, c
     if (top.has("render")) readRender(root.at("render"), scene);
     if (ov.spp > 0) scene.render.spp = ov.spp;
     if (ov.areaLights) scene.render.areaLights = *ov.areaLights;
+    if (ov.integrator) scene.render.integrator = *ov.integrator;
     if (ov.width > 0) scene.render.width = ov.width;
     if (ov.height > 0) scene.render.height = ov.height;
     if (ov.seed >= 0) scene.render.seed = uint64_t(ov.seed);
@@ -379,6 +389,12 @@ Scene loadSceneFromString(const std::string& text, const std::string& baseDir, c
                                             std::to_string(c.x1) + "," + std::to_string(c.y1) + " is not inside the " +
                                             std::to_string(scene.render.width) + "x" + std::to_string(scene.render.height) + " image");
         scene.render.crop = c;
+    }
+    if (scene.render.integrator == IntegratorKind::Raster) {
+        // What the rasteriser computes: one sample at each pixel centre, 2x2-quad derivatives (docs/preview.md).
+        scene.render.spp = 1;
+        scene.render.pixelCenter = true;
+        scene.render.derivatives = DerivativeMode::Quad;
     }
     if (scene.render.pixelCenter && scene.render.spp != 1)
         throw InputError("/render/pixel_center", "pixel_center sampling needs spp = 1 (got " + std::to_string(scene.render.spp) + ")");
@@ -395,6 +411,7 @@ Scene loadSceneFromString(const std::string& text, const std::string& baseDir, c
 
     top.require("camera");
     readCamera(root.at("camera"), scene);
+    if (scene.render.integrator == IntegratorKind::Raster) scene.camera.apertureRadius = 0.f;  // the rasteriser's pinhole
     if (top.has("materials")) readMaterials(root.at("materials"), ctx);
     top.require("shapes");
     const Json& shapes = root.at("shapes");
@@ -424,7 +441,7 @@ std::string describeScene(const Scene& s) {
     for (auto& sh : s.shapes) tris += sh.mesh.triangleCount();
     o << "scene: " << s.sourcePath << "\n";
     o << "image: " << s.render.width << "x" << s.render.height << ", " << s.render.spp << " spp, seed " << s.render.seed
-      << ", " << (s.render.integrator == IntegratorKind::Path ? "path tracer (max depth " + std::to_string(s.render.maxDepth) + ")" : std::string("direct lighting"))
+      << ", " << (s.render.integrator == IntegratorKind::Path ? "path tracer (max depth " + std::to_string(s.render.maxDepth) + ")" : s.render.integrator == IntegratorKind::Raster ? std::string("raster (the GPU preview's lighting)") : std::string("direct lighting"))
       << ", " << (s.render.filter == PixelFilterKind::Box ? "box" : "gaussian") << " filter\n";
     o << "camera: position (" << s.camera.position.x << ", " << s.camera.position.y << ", " << s.camera.position.z
       << "), fov " << s.camera.fovDegrees << " deg (" << (s.camera.fovIsHorizontal ? "x" : "y") << ")\n";

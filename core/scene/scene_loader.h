@@ -16,6 +16,7 @@ struct SceneOverrides {
     int64_t seed = -1;         // <0 = keep
     std::optional<CropWindow> crop;
     std::optional<AreaLightMode> areaLights;  // render.area_lights
+    std::optional<IntegratorKind> integrator; // render.integrator
 };
 
 // Parses and builds a scene from a file. Relative paths in the scene resolve against its folder.

@@ -5,6 +5,7 @@
 #include "plugin/cli/graph_commands.h"
 #include "plugin/cli/normalmap_command.h"
 #include "plugin/cli/nodes_command.h"
+#include "plugin/cli/preview_command.h"
 #include "plugin/cli/validation_cli.h"
 
 #include <CLI/CLI.hpp>
@@ -89,6 +90,10 @@ int main(int argc, char** argv) {
     std::string areaLights;
     render->add_option("--area-lights", areaLights, "Quad lights: ltc (analytic where lobes can) or sampled (overrides render.area_lights)")
         ->check(CLI::IsMember({"ltc", "sampled"}));
+    std::string integratorName;
+    render->add_option("--integrator", integratorName,
+                       "path, direct or raster (the GPU preview's lighting, for image parity; overrides render.integrator)")
+        ->check(CLI::IsMember({"path", "direct", "raster"}));
     render->add_option("--progress", progress, "Progress output: bar (stderr), json (stdout lines) or none")
         ->check(CLI::IsMember({"bar", "json", "none"}));
     CameraShiftOptions shiftOpts;
@@ -98,6 +103,10 @@ int main(int argc, char** argv) {
         ov.spp = spp;
         ov.seed = seed;
         if (!areaLights.empty()) ov.areaLights = areaLights == "ltc" ? AreaLightMode::Ltc : AreaLightMode::Sampled;
+        if (!integratorName.empty())
+            ov.integrator = integratorName == "path"     ? IntegratorKind::Path
+                            : integratorName == "direct" ? IntegratorKind::Direct
+                                                         : IntegratorKind::Raster;
         if (!resolution.empty() && !parsePair(resolution, 'x', ov.width, ov.height)) {
             std::fprintf(stderr, "specula: error: --resolution expects WxH, got '%s'\n", resolution.c_str());
             exitCode = kExitUsage;
@@ -220,6 +229,8 @@ int main(int argc, char** argv) {
     addGraphCommands(app, exitCode);
     // ---- normalmap: deterministic procedural normal maps (plugin/cli/normalmap_command.cpp) --------
     addNormalmapCommand(app, exitCode);
+    // ---- preview: the GPU rasteriser over the generated GLSL (plugin/cli/preview_command.cpp) -------
+    addPreviewCommand(app, exitCode);
     addNodesCommand(app, exitCode);
 
     try {

@@ -73,64 +73,11 @@ def render_to(path, engine):
 
 
 def build_anchor_scene(size):
-    """shared/anchors/blender_scene.py, the reference scene shared with Cycles and POV-Ray: a GGX copper sphere
-    (Principled, metallic 1, roughness 0.2) on a grey Diffuse plane, one 1500 W point light, a black world."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    """tools/blender/anchor_scene.py (the scene of examples/anchor-sphere.json and shared/anchors), with the add-on."""
+    sys.path.insert(0, os.path.join(ROOT, "tools", "blender"))
+    import anchor_scene
+    scene = anchor_scene.build(size)
     enable_addon()
-    scene = bpy.context.scene
-    bpy.ops.mesh.primitive_uv_sphere_add(segments=128, ring_count=64, radius=1.0, location=(0, 0, 1))
-    sphere = bpy.context.object
-    bpy.ops.object.shade_smooth()
-    bpy.ops.mesh.primitive_plane_add(size=20.0, location=(0, 0, 0))
-    plane = bpy.context.object
-
-    metal = bpy.data.materials.new("GGXMetal")
-    metal.use_nodes = True
-    bsdf = metal.node_tree.nodes["Principled BSDF"]
-    bsdf.distribution = "GGX"
-    bsdf.inputs["Base Color"].default_value = (0.95, 0.64, 0.54, 1.0)
-    bsdf.inputs["Metallic"].default_value = 1.0
-    bsdf.inputs["Roughness"].default_value = 0.2
-    sphere.data.materials.append(metal)
-
-    grey = bpy.data.materials.new("GreyDiffuse")
-    grey.use_nodes = True
-    nt = grey.node_tree
-    nt.nodes.remove(nt.nodes["Principled BSDF"])
-    diffuse = nt.nodes.new("ShaderNodeBsdfDiffuse")
-    diffuse.inputs["Color"].default_value = (0.5, 0.5, 0.5, 1.0)
-    nt.links.new(diffuse.outputs["BSDF"], nt.nodes["Material Output"].inputs["Surface"])
-    plane.data.materials.append(grey)
-
-    cam_data = bpy.data.cameras.new("Camera")
-    cam_data.lens = 50.0
-    cam = bpy.data.objects.new("Camera", cam_data)
-    scene.collection.objects.link(cam)
-    cam.location = (0.0, -6.0, 2.5)
-    cam.rotation_euler = (math.radians(90.0 - 12.0), 0.0, 0.0)
-    scene.camera = cam
-
-    light_data = bpy.data.lights.new("Point", type="POINT")
-    light_data.energy = 1500.0
-    light_data.shadow_soft_size = 0.0
-    light = bpy.data.objects.new("Point", light_data)
-    scene.collection.objects.link(light)
-    light.location = (4.0, -4.0, 6.0)
-
-    world = bpy.data.worlds.new("Black")
-    world.use_nodes = True
-    world.node_tree.nodes["Background"].inputs["Strength"].default_value = 0.0
-    scene.world = world
-
-    r = scene.render
-    r.resolution_x = r.resolution_y = size
-    r.resolution_percentage = 100
-    r.threads_mode = "FIXED"
-    r.threads = 2
-    scene.cycles.device = "CPU"
-    scene.cycles.use_adaptive_sampling = False
-    scene.cycles.use_denoising = False     # Debian's Blender has no OpenImageDenoise (platform.md 4.5)
-    scene.view_settings.view_transform = "Standard"
     return scene
 
 

@@ -3,6 +3,7 @@
 #pragma once
 
 #include "core/graph/node_spec.h"
+#include "plugin/preview/gl_util.h"
 
 #include <nlohmann/json.hpp>
 
@@ -33,30 +34,12 @@ std::vector<float> glRun(unsigned program, int w, int h, const std::function<voi
 std::string nodeCall(const graph::NodeSpec& spec, const std::function<std::string(int)>& inputExpr,
                      const std::vector<std::string>& outVars, const std::vector<std::string>& resourceVars = {});
 
-// A texture made from a resource's texels and sampler state (graph::ResourceImage), of the target its GLSL type
-// needs (sampler2D: GL_TEXTURE_2D, sampler1DArray: GL_TEXTURE_1D_ARRAY, sampler2DArray:
-// GL_TEXTURE_2D_ARRAY with ResourceImage::Level::layers). Bind it at the resource's binding.
-struct GlTexture {
-    unsigned name = 0, target = 0;
-};
-GlTexture glResourceTexture(const graph::ResourceImage& image, const std::string& glslType);
-
-// What a host does with emitted modules: each module's uniform block (member values at their offsets) and resource
-// textures bound at the bindings its manifest lists, nothing else. Owns the GL objects.
-class ManifestBindings {
-public:
-    ManifestBindings() = default;
-    ManifestBindings(const ManifestBindings&) = delete;
-    ManifestBindings& operator=(const ManifestBindings&) = delete;
-    ~ManifestBindings();
-    // images: the module's resources in manifest order (codegen::exportGlslResources).
-    void add(const nlohmann::json& manifest, const std::vector<graph::ResourceImage>& images);
-    void bind() const;
-
-private:
-    std::vector<unsigned> buffers_, bufferBindings_;
-    std::vector<GlTexture> textures_;
-    std::vector<int> textureBindings_;
-};
+// Resource textures and manifest bindings: the preview's own (plugin/preview/gl_util.h), so tests bind exactly as
+// a host does.
+using GlTexture = gl::Texture;
+inline GlTexture glResourceTexture(const graph::ResourceImage& image, const std::string& glslType) {
+    return gl::resourceTexture(image, glslType);
+}
+using ManifestBindings = gl::ManifestBindings;
 
 }  // namespace specula::glsltest

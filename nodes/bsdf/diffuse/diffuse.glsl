@@ -12,8 +12,10 @@ void spc_bsdf_diffuse(SpeculaClosureQuery q, vec3 color, vec3 normal, vec3 tange
         vec3 p[4];
         spc_ltc_local_polygon(q, T, B, N, p);
         bsdf.f = color * spc_ltc_cosine_integral(p, q.vertex_count, q.horizon, ltc_amplitude);
+        bsdf.f_diffuse = bsdf.f;
         return;
     }
     vec3 i = spc_to_local(q.wi, T, B, N);
     bsdf.f = (o.z <= 0.0 || i.z <= 0.0) ? vec3(0.0) : color * (SPC_INV_PI * i.z);
+    bsdf.f_diffuse = bsdf.f;
 }

@@ -229,11 +229,13 @@ void spc_bsdf_ltc_normal_map(SpeculaClosureQuery q, int convention, float roughn
         spc_ltc_local_polygon(q, T, B, N, p);
         if (mag > 0.0) bsdf.f += specTint * (mag * spc_ltc_integrate(specInv, p, q.vertex_count, q.horizon, ltc_amplitude));
         if (diffMag > 0.0)
-            bsdf.f += diffTint * (diffMag * spc_ltc_integrate(diffInv, p, q.vertex_count, q.horizon, ltc_amplitude));
+            bsdf.f_diffuse = diffTint * (diffMag * spc_ltc_integrate(diffInv, p, q.vertex_count, q.horizon, ltc_amplitude));
+        bsdf.f += bsdf.f_diffuse;
         return;
     }
     vec3 i = spc_to_local(q.wi, T, B, N);
     if (i.z <= 0.0) return;
     if (mag > 0.0) bsdf.f += specTint * (mag * spc_lnm_density(specInv, i));
-    if (diffMag > 0.0) bsdf.f += diffTint * (diffMag * spc_lnm_density(diffInv, i));
+    if (diffMag > 0.0) bsdf.f_diffuse = diffTint * (diffMag * spc_lnm_density(diffInv, i));
+    bsdf.f += bsdf.f_diffuse;
 }

@@ -48,6 +48,7 @@ void spc_closure_coat(SpeculaClosureQuery q, SpeculaClosure base, float weight, 
     float e = w > 0.0 ? spc_coat_albedo(coat_albedo, dot(q.wo, N), r, eta) : 0.0;
     vec3 baseScale = vec3(1.0 - w) + w * tint * (1.0 - e);
     bsdf.f = base.f * baseScale;
+    bsdf.f_diffuse = base.f_diffuse * baseScale;
     bsdf.emission = base.emission * baseScale;
     bsdf.partial = base.partial;
     if (!(w > 0.0)) return;
