@@ -1,12 +1,15 @@
 // The GPU preview (docs/preview.md): rasterises a loaded scene with each material's generated GLSL module through
-// OpenGL 4.5 (headless EGL), one sample at each pixel centre, and returns the same AOV buffers as the CPU renderer.
+// OpenGL 4.5 (headless EGL or a window's context), one sample at each pixel centre, with the CPU renderer's AOVs.
 #pragma once
 
+#include "core/render/camera.h"
 #include "core/render/renderer.h"
 
 #include <nlohmann/json.hpp>
 
+#include <memory>
 #include <string>
+#include <vector>
 
 namespace specula {
 struct Scene;
@@ -27,9 +30,34 @@ struct PreviewOutput {
     std::vector<std::string> warnings;  // per material: what the GPU computes instead (GlslModule::warnings)
 };
 
-// 'materials' is the scene document's "materials" object (the graphs the GLSL is emitted from); 'baseDir' resolves
-// their texture files. Throws specula::Error (io) when there is no GL 4.5 context, (bad_input) when a material's
-// GLSL does not compile.
+// The scene's GPU state in the GL context current on the calling thread: one program per material (its module plus
+// the light loop), meshes, lights, shadow maps, the prefiltered environment. Draw as often as wanted, from any
+// camera, at any size; keep the context current and alive while the renderer lives.
+class PreviewRenderer {
+public:
+    // 'materials' is the scene document's "materials" object (the graphs the GLSL is emitted from); 'baseDir'
+    // resolves their texture files. Throws specula::Error (bad_input) when a material's GLSL does not compile.
+    PreviewRenderer(const Scene& scene, const nlohmann::json& materials, const std::string& baseDir);
+    ~PreviewRenderer();
+    PreviewRenderer(const PreviewRenderer&) = delete;
+    PreviewRenderer& operator=(const PreviewRenderer&) = delete;
+
+    // Draws one frame into the renderer's AOV target (re-made when the size changes); returns GL_TIME_ELAPSED in ns
+    // (0 when the driver's timer query gives nothing). Leaves the target bound as the draw framebuffer.
+    double draw(const CameraDesc& camera, int width, int height);
+    unsigned beautyTexture() const;  // GL texture name of the last draw's beauty (RGBA32F, linear, GL row 0 = bottom)
+    unsigned framebuffer() const;    // the AOV target's framebuffer object (attachment 0 = beauty)
+    // The last draw's AOVs in the renderer's layout (beauty, diffuse, specular, normal, uv, depth; rows top first).
+    ImageSet readBack() const;
+    const std::vector<std::string>& warnings() const;
+
+private:
+    struct State;
+    std::unique_ptr<State> s_;
+};
+
+// One headless render: gl::context(), a PreviewRenderer, options.frames draws from the scene camera, read back.
+// Throws specula::Error (io) when there is no GL 4.5 context.
 PreviewOutput renderPreview(const Scene& scene, const nlohmann::json& materials, const std::string& baseDir,
                             const PreviewOptions& options = {});
 
