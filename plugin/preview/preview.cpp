@@ -318,102 +318,45 @@ std::string glslDefines() {
 
 }  // namespace
 
-PreviewOutput renderPreview(const Scene& scene, const nlohmann::json& materials, const std::string& baseDir,
-                            const PreviewOptions& options) {
-    using Clock = std::chrono::steady_clock;
-    const auto t0 = Clock::now();
-    std::string why;
-    if (!gl::context(&why)) throw IoError("no OpenGL 4.5 context for the preview: " + why);
-    PreviewOutput result;
-    result.renderer = gl::renderer();
-    const RenderSettings& rs = scene.render;
-    const int W = rs.width, H = rs.height;
-    PerspectiveCamera camera(scene.camera, W, H);
-
-    // Near and far planes from the scene's extent along the view axis.
-    float zFar = 1e-3f;
-    for (const ShapeInstance& sh : scene.shapes)
-        for (const Vec3& p : sh.mesh.positions) zFar = std::max(zFar, glm::dot(p - camera.position(), camera.forward()));
-    zFar *= 1.01f;
-    const float zNear = std::max(zFar * 1e-5f, 1e-5f);
-
-    // Frame block: camera and lights.
-    FrameBlock frame{};
-    viewProjection(camera, zNear, zFar, frame.viewProj);
-    frame.eye[0] = camera.position().x, frame.eye[1] = camera.position().y, frame.eye[2] = camera.position().z;
-    frame.forward[0] = camera.forward().x, frame.forward[1] = camera.forward().y, frame.forward[2] = camera.forward().z;
-    Color3 background(0.f);
-    const RasterLight* map = nullptr;
+struct PreviewRenderer::State {
+    const Scene& scene;
     std::vector<RasterLight> rasterLights;
-    for (const auto& light : scene.lights) rasterLights.push_back(light->raster());
-    int count = 0;
-    for (const RasterLight& r : rasterLights) {
-        if (r.kind == RasterLight::Kind::Environment) {
-            if (r.hasMap) {
-                if (map) throw InputError("/lights", "the preview shows one environment map (the scene has several)");
-                map = &r;
-            } else {
-                background += r.value;
-            }
-        }
-        if (count == kMaxLights) throw InputError("/lights", "the preview takes at most 64 lights");
-        packLight(r, &frame.lights[count * kLightVec4s]);
-        ++count;
-    }
-    frame.counts[0] = count;
-    frame.counts[1] = rs.ltcHorizon;
-    GLuint frameBuffer;
-    glGenBuffers(1, &frameBuffer);
-    glBindBuffer(GL_UNIFORM_BUFFER, frameBuffer);
-    glBufferData(GL_UNIFORM_BUFFER, sizeof frame, &frame, GL_STATIC_DRAW);
-
-    // One program per material: its module (uniform block at binding 0, resources at 1, 2, ...) plus the light loop.
+    const RasterLight* map = nullptr;
+    Color3 background{0.f};
+    FrameBlock frame{};
+    GLuint frameBuffer = 0;
     struct MaterialGpu {
         GLuint program = 0;
         std::unique_ptr<gl::ManifestBindings> bindings;
     };
-    std::vector<MaterialGpu> mats(scene.materials.size());
-    for (size_t m = 0; m < scene.materials.size(); ++m) {
-        const std::string& name = scene.materials[m]->name();
-        const std::string pointer = "/materials/" + pointerEscape(name);
-        if (!materials.contains(name)) throw InputError(pointer, "material '" + name + "' is not in the document");
-        graph::GraphDesc g = graph::parseGraph(materials.at(name), pointer);
-        codegen::GlslModule mod = codegen::emitGlsl(g, {});
-        for (const std::string& w : mod.warnings) result.warnings.push_back("material '" + name + "': " + w);
-        std::vector<graph::ResourceImage> images =
-            codegen::exportGlslResources(g, mod, GraphLoadContext{scene.textures.get(), baseDir});
-        std::string source = mod.source;
-        // The module starts with its #version line; the defines and the main go after the whole module.
-        std::string log;
-        mats[m].program = gl::program(kVertex, source + glslDefines() + kSurfaceMain, &log);
-        if (!mats[m].program) throw InputError(pointer, "the preview shader of material '" + name + "' does not compile: " + log);
-        mats[m].bindings = std::make_unique<gl::ManifestBindings>();
-        mats[m].bindings->add(codegen::glslManifest(mod, images, {}), images);
-    }
-    std::string log;
-    GLuint emitterProgram = gl::program(kVertex, kEmitterFragment, &log);
-    GLuint backgroundProgram = emitterProgram ? gl::program(kBackgroundVertex, kBackgroundFragment, &log) : 0;
-    if (!backgroundProgram) throw IoError("the preview's own shaders do not compile: " + log);
-    GLuint mapTexture = 0;
-    if (map) {
-        std::vector<float> rgba(size_t(map->mapWidth) * map->mapHeight * 4, 1.f);
-        for (int y = 0; y < map->mapHeight; ++y)  // GL row 0 is the bottom row
-            for (int x = 0; x < map->mapWidth; ++x)
-                for (int c = 0; c < 3; ++c)
-                    rgba[(size_t(map->mapHeight - 1 - y) * map->mapWidth + x) * 4 + c] =
-                        map->map[(size_t(y) * map->mapWidth + x) * 3 + c];
-        glGenTextures(1, &mapTexture);
-        glBindTexture(GL_TEXTURE_2D, mapTexture);
-        glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, map->mapWidth, map->mapHeight, 0, GL_RGBA, GL_FLOAT, rgba.data());
-        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-    }
-
+    std::vector<MaterialGpu> mats;
+    GLuint emitterProgram = 0, backgroundProgram = 0, mapTexture = 0;
     std::vector<GpuMesh> meshes;
-    for (const ShapeInstance& sh : scene.shapes) meshes.push_back(uploadMesh(sh.mesh));
+    float sceneFar = 1e-3f;  // the largest distance from the scene camera to a vertex; bounds the far plane
+    // The AOV target, made for the size of the last draw.
+    int width = 0, height = 0;
+    GLuint fbo = 0, depth = 0, colour[kAovCount] = {};
+    GLuint query = 0;
+    std::vector<std::string> warnings;
 
-    // Render target: five RGBA32F attachments and a float depth buffer.
-    GLuint fbo, depth, colour[kAovCount];
+    explicit State(const Scene& s) : scene(s) {}
+    void makeTarget(int W, int H);
+    void freeTarget();
+};
+
+void PreviewRenderer::State::freeTarget() {
+    if (!fbo) return;
+    glDeleteFramebuffers(1, &fbo);
+    glDeleteTextures(kAovCount, colour);
+    glDeleteRenderbuffers(1, &depth);
+    fbo = depth = 0;
+    width = height = 0;
+}
+
+// Five RGBA32F attachments and a float depth buffer.
+void PreviewRenderer::State::makeTarget(int W, int H) {
+    if (fbo && W == width && H == height) return;
+    freeTarget();
     glGenFramebuffers(1, &fbo);
     glBindFramebuffer(GL_FRAMEBUFFER, fbo);
     glGenTextures(kAovCount, colour);
@@ -421,6 +364,8 @@ PreviewOutput renderPreview(const Scene& scene, const nlohmann::json& materials,
     for (int i = 0; i < kAovCount; ++i) {
         glBindTexture(GL_TEXTURE_2D, colour[i]);
         glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, W, H, 0, GL_RGBA, GL_FLOAT, nullptr);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
         glFramebufferTexture2D(GL_FRAMEBUFFER, GLenum(GL_COLOR_ATTACHMENT0 + i), GL_TEXTURE_2D, colour[i], 0);
         drawBuffers[i] = GLenum(GL_COLOR_ATTACHMENT0 + i);
     }
@@ -431,77 +376,174 @@ PreviewOutput renderPreview(const Scene& scene, const nlohmann::json& materials,
     glDrawBuffers(kAovCount, drawBuffers);
     if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
         throw IoError("the preview's render target is incomplete (" + std::to_string(W) + "x" + std::to_string(H) + ")");
-    result.setupSeconds = std::chrono::duration<double>(Clock::now() - t0).count();
+    width = W;
+    height = H;
+}
 
-    GLuint query;
-    glGenQueries(1, &query);
-    double gpuNs = 0.0, wallNs = 0.0;
-    const int frames = std::max(1, options.frames);
-    glFinish();
-    auto frameStart = Clock::now();
-    for (int f = 0; f < frames; ++f) {
-        glBeginQuery(GL_TIME_ELAPSED, query);
-        glViewport(0, 0, W, H);
-        glEnable(GL_DEPTH_TEST);
-        glDepthFunc(GL_LESS);
-        glDisable(GL_CULL_FACE);
-        glClearDepth(1.0);
-        glClear(GL_DEPTH_BUFFER_BIT);
-        glBindBufferBase(GL_UNIFORM_BUFFER, 1, frameBuffer);
-        for (size_t i = 0; i < scene.shapes.size(); ++i) {
-            const ShapeInstance& sh = scene.shapes[i];
-            if (sh.areaLight >= 0) {
-                const RasterLight& r = rasterLights[size_t(sh.areaLight)];
-                glUseProgram(emitterProgram);
-                glUniform4f(0, r.value.x, r.value.y, r.value.z, r.twoSided ? 1.f : 0.f);
-                Vec3 n = glm::normalize(glm::cross(r.direction, r.edgeV));
-                glUniform3f(1, n.x, n.y, n.z);
-            } else {
-                glUseProgram(mats[size_t(sh.material)].program);
-                mats[size_t(sh.material)].bindings->bind();
-                glBindBufferBase(GL_UNIFORM_BUFFER, 1, frameBuffer);
-            }
-            glBindVertexArray(meshes[i].vao);
-            glDrawElements(GL_TRIANGLES, meshes[i].indexCount, GL_UNSIGNED_INT, nullptr);
-        }
-        // Background where no surface is: depth 1 passes GL_LEQUAL only where the depth buffer is still clear.
-        glDepthFunc(GL_LEQUAL);
-        glUseProgram(backgroundProgram);
-        const Vec3 fw = camera.forward(), rt = camera.right() * camera.halfWidth(), up = camera.up() * camera.halfHeight();
-        glUniform3f(0, fw.x, fw.y, fw.z);
-        glUniform3f(1, rt.x, rt.y, rt.z);
-        glUniform3f(2, up.x, up.y, up.z);
-        glUniform3f(3, background.x, background.y, background.z);
-        glUniform4f(4, map ? map->mapScale.x : 0.f, map ? map->mapScale.y : 0.f, map ? map->mapScale.z : 0.f,
-                    map ? map->mapRotation : 0.f);
-        glUniform2i(5, map ? map->mapWidth : 0, map ? map->mapHeight : 0);
-        glActiveTexture(GL_TEXTURE0);
-        glBindTexture(GL_TEXTURE_2D, mapTexture);
-        glBindVertexArray(meshes.empty() ? 0 : meshes[0].vao);
-        glDrawArrays(GL_TRIANGLES, 0, 3);
-        glEndQuery(GL_TIME_ELAPSED);
-        GLuint64 ns = 0;
-        glGetQueryObjectui64v(query, GL_QUERY_RESULT, &ns);
-        gpuNs += double(ns);
-        glFinish();
-        const auto now = Clock::now();
-        wallNs += std::chrono::duration<double, std::nano>(now - frameStart).count();
-        frameStart = now;
+PreviewRenderer::PreviewRenderer(const Scene& scene, const nlohmann::json& materials, const std::string& baseDir)
+    : s_(std::make_unique<State>(scene)) {
+    State& st = *s_;
+    {
+        PerspectiveCamera camera(scene.camera, std::max(1, scene.render.width), std::max(1, scene.render.height));
+        for (const ShapeInstance& sh : scene.shapes)
+            for (const Vec3& p : sh.mesh.positions) st.sceneFar = std::max(st.sceneFar, glm::length(p - camera.position()));
     }
-    result.gpuMsPerFrame = gpuNs / frames * 1e-6;
-    result.wallMsPerFrame = wallNs / frames * 1e-6;
+    for (const auto& light : scene.lights) st.rasterLights.push_back(light->raster());
+    int count = 0;
+    for (const RasterLight& r : st.rasterLights) {
+        if (r.kind == RasterLight::Kind::Environment) {
+            if (r.hasMap) {
+                if (st.map) throw InputError("/lights", "the preview shows one environment map (the scene has several)");
+                st.map = &r;
+            } else {
+                st.background += r.value;
+            }
+        }
+        if (count == kMaxLights) throw InputError("/lights", "the preview takes at most 64 lights");
+        packLight(r, &st.frame.lights[count * kLightVec4s]);
+        ++count;
+    }
+    st.frame.counts[0] = count;
+    st.frame.counts[1] = scene.render.ltcHorizon;
+    glGenBuffers(1, &st.frameBuffer);
+    glBindBuffer(GL_UNIFORM_BUFFER, st.frameBuffer);
+    glBufferData(GL_UNIFORM_BUFFER, sizeof st.frame, &st.frame, GL_DYNAMIC_DRAW);
 
-    // Read back into the renderer's AOV layout (rows top first).
-    ImageSet& img = result.output.images;
+    // One program per material: its module (uniform block at binding 0, resources at 1, 2, ...) plus the light loop.
+    st.mats.resize(scene.materials.size());
+    for (size_t m = 0; m < scene.materials.size(); ++m) {
+        const std::string& name = scene.materials[m]->name();
+        const std::string pointer = "/materials/" + pointerEscape(name);
+        if (!materials.contains(name)) throw InputError(pointer, "material '" + name + "' is not in the document");
+        graph::GraphDesc g = graph::parseGraph(materials.at(name), pointer);
+        codegen::GlslModule mod = codegen::emitGlsl(g, {});
+        for (const std::string& w : mod.warnings) st.warnings.push_back("material '" + name + "': " + w);
+        std::vector<graph::ResourceImage> images =
+            codegen::exportGlslResources(g, mod, GraphLoadContext{scene.textures.get(), baseDir});
+        // The module starts with its #version line; the defines and the main go after the whole module.
+        std::string log;
+        st.mats[m].program = gl::program(kVertex, mod.source + glslDefines() + kSurfaceMain, &log);
+        if (!st.mats[m].program)
+            throw InputError(pointer, "the preview shader of material '" + name + "' does not compile: " + log);
+        st.mats[m].bindings = std::make_unique<gl::ManifestBindings>();
+        st.mats[m].bindings->add(codegen::glslManifest(mod, images, {}), images);
+    }
+    std::string log;
+    st.emitterProgram = gl::program(kVertex, kEmitterFragment, &log);
+    st.backgroundProgram = st.emitterProgram ? gl::program(kBackgroundVertex, kBackgroundFragment, &log) : 0;
+    if (!st.backgroundProgram) throw IoError("the preview's own shaders do not compile: " + log);
+    if (const RasterLight* map = st.map) {
+        std::vector<float> rgba(size_t(map->mapWidth) * map->mapHeight * 4, 1.f);
+        for (int y = 0; y < map->mapHeight; ++y)  // GL row 0 is the bottom row
+            for (int x = 0; x < map->mapWidth; ++x)
+                for (int c = 0; c < 3; ++c)
+                    rgba[(size_t(map->mapHeight - 1 - y) * map->mapWidth + x) * 4 + c] =
+                        map->map[(size_t(y) * map->mapWidth + x) * 3 + c];
+        glGenTextures(1, &st.mapTexture);
+        glBindTexture(GL_TEXTURE_2D, st.mapTexture);
+        glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, map->mapWidth, map->mapHeight, 0, GL_RGBA, GL_FLOAT, rgba.data());
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    }
+    for (const ShapeInstance& sh : scene.shapes) st.meshes.push_back(uploadMesh(sh.mesh));
+    glGenQueries(1, &st.query);
+}
+
+PreviewRenderer::~PreviewRenderer() {
+    State& st = *s_;
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    st.freeTarget();
+    glDeleteQueries(1, &st.query);
+    glDeleteBuffers(1, &st.frameBuffer);
+    if (st.mapTexture) glDeleteTextures(1, &st.mapTexture);
+    for (GpuMesh& m : st.meshes) {
+        glDeleteBuffers(1, &m.vbo);
+        glDeleteBuffers(1, &m.ebo);
+        glDeleteVertexArrays(1, &m.vao);
+    }
+    for (State::MaterialGpu& m : st.mats) glDeleteProgram(m.program);
+    glDeleteProgram(st.emitterProgram);
+    glDeleteProgram(st.backgroundProgram);
+}
+
+const std::vector<std::string>& PreviewRenderer::warnings() const { return s_->warnings; }
+unsigned PreviewRenderer::beautyTexture() const { return s_->colour[0]; }
+unsigned PreviewRenderer::framebuffer() const { return s_->fbo; }
+
+double PreviewRenderer::draw(const CameraDesc& cameraDesc, int W, int H) {
+    State& st = *s_;
+    const Scene& scene = st.scene;
+    st.makeTarget(W, H);
+    PerspectiveCamera camera(cameraDesc, W, H);
+    // Near and far planes from the scene's extent (seen from the scene camera; a moved camera adds its offset).
+    const float zFar = (st.sceneFar + glm::length(camera.position() - PerspectiveCamera(scene.camera, W, H).position())) * 1.01f;
+    const float zNear = std::max(zFar * 1e-5f, 1e-5f);
+    FrameBlock& frame = st.frame;
+    viewProjection(camera, zNear, zFar, frame.viewProj);
+    frame.eye[0] = camera.position().x, frame.eye[1] = camera.position().y, frame.eye[2] = camera.position().z;
+    frame.forward[0] = camera.forward().x, frame.forward[1] = camera.forward().y, frame.forward[2] = camera.forward().z;
+    glBindBuffer(GL_UNIFORM_BUFFER, st.frameBuffer);
+    glBufferSubData(GL_UNIFORM_BUFFER, 0, sizeof frame, &frame);
+
+    glBindFramebuffer(GL_FRAMEBUFFER, st.fbo);
+    glBeginQuery(GL_TIME_ELAPSED, st.query);
+    glViewport(0, 0, W, H);
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LESS);
+    glDisable(GL_CULL_FACE);
+    glClearDepth(1.0);
+    glClear(GL_DEPTH_BUFFER_BIT);
+    glBindBufferBase(GL_UNIFORM_BUFFER, 1, st.frameBuffer);
+    for (size_t i = 0; i < scene.shapes.size(); ++i) {
+        const ShapeInstance& sh = scene.shapes[i];
+        if (sh.areaLight >= 0) {
+            const RasterLight& r = st.rasterLights[size_t(sh.areaLight)];
+            glUseProgram(st.emitterProgram);
+            glUniform4f(0, r.value.x, r.value.y, r.value.z, r.twoSided ? 1.f : 0.f);
+            Vec3 n = glm::normalize(glm::cross(r.direction, r.edgeV));
+            glUniform3f(1, n.x, n.y, n.z);
+        } else {
+            glUseProgram(st.mats[size_t(sh.material)].program);
+            st.mats[size_t(sh.material)].bindings->bind();
+            glBindBufferBase(GL_UNIFORM_BUFFER, 1, st.frameBuffer);
+        }
+        glBindVertexArray(st.meshes[i].vao);
+        glDrawElements(GL_TRIANGLES, st.meshes[i].indexCount, GL_UNSIGNED_INT, nullptr);
+    }
+    // Background where no surface is: depth 1 passes GL_LEQUAL only where the depth buffer is still clear.
+    glDepthFunc(GL_LEQUAL);
+    glUseProgram(st.backgroundProgram);
+    const Vec3 fw = camera.forward(), rt = camera.right() * camera.halfWidth(), up = camera.up() * camera.halfHeight();
+    const RasterLight* map = st.map;
+    glUniform3f(0, fw.x, fw.y, fw.z);
+    glUniform3f(1, rt.x, rt.y, rt.z);
+    glUniform3f(2, up.x, up.y, up.z);
+    glUniform3f(3, st.background.x, st.background.y, st.background.z);
+    glUniform4f(4, map ? map->mapScale.x : 0.f, map ? map->mapScale.y : 0.f, map ? map->mapScale.z : 0.f,
+                map ? map->mapRotation : 0.f);
+    glUniform2i(5, map ? map->mapWidth : 0, map ? map->mapHeight : 0);
+    glActiveTexture(GL_TEXTURE0);
+    glBindTexture(GL_TEXTURE_2D, st.mapTexture);
+    glBindVertexArray(st.meshes.empty() ? 0 : st.meshes[0].vao);
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+    glEndQuery(GL_TIME_ELAPSED);
+    GLuint64 ns = 0;
+    glGetQueryObjectui64v(st.query, GL_QUERY_RESULT, &ns);
+    return double(ns);
+}
+
+ImageSet PreviewRenderer::readBack() const {
+    const State& st = *s_;
+    const int W = st.width, H = st.height;
+    ImageSet img;
     img.width = W;
     img.height = H;
+    if (!st.fbo) return img;
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, st.fbo);
     std::vector<float> px(size_t(W) * H * 4);
-    auto readAttachment = [&](int i) {
-        glReadBuffer(GLenum(GL_COLOR_ATTACHMENT0 + i));
-        glReadPixels(0, 0, W, H, GL_RGBA, GL_FLOAT, px.data());
-    };
     auto addAov = [&](const char* name, std::vector<std::string> channels, int attachment, int firstChannel) {
-        readAttachment(attachment);
+        glReadBuffer(GLenum(GL_COLOR_ATTACHMENT0 + attachment));
+        glReadPixels(0, 0, W, H, GL_RGBA, GL_FLOAT, px.data());
         AovBuffer b;
         b.name = name;
         b.channelNames = std::move(channels);
@@ -520,28 +562,43 @@ PreviewOutput renderPreview(const Scene& scene, const nlohmann::json& materials,
     addAov("normal", {"X", "Y", "Z"}, 3, 0);
     addAov("uv", {"U", "V"}, 4, 1);
     addAov("depth", {"Z"}, 4, 0);
+    return img;
+}
+
+PreviewOutput renderPreview(const Scene& scene, const nlohmann::json& materials, const std::string& baseDir,
+                            const PreviewOptions& options) {
+    using Clock = std::chrono::steady_clock;
+    const auto t0 = Clock::now();
+    std::string why;
+    if (!gl::context(&why)) throw IoError("no OpenGL 4.5 context for the preview: " + why);
+    PreviewOutput result;
+    result.renderer = gl::renderer();
+    const int W = scene.render.width, H = scene.render.height;
+    PreviewRenderer renderer(scene, materials, baseDir);
+    result.warnings = renderer.warnings();
+    result.setupSeconds = std::chrono::duration<double>(Clock::now() - t0).count();
+    double gpuNs = 0.0, wallNs = 0.0;
+    const int frames = std::max(1, options.frames);
+    glFinish();
+    auto frameStart = Clock::now();
+    for (int f = 0; f < frames; ++f) {
+        gpuNs += renderer.draw(scene.camera, W, H);
+        glFinish();
+        const auto now = Clock::now();
+        wallNs += std::chrono::duration<double, std::nano>(now - frameStart).count();
+        frameStart = now;
+    }
+    result.gpuMsPerFrame = gpuNs / frames * 1e-6;
+    result.wallMsPerFrame = wallNs / frames * 1e-6;
+    ImageSet& img = result.output.images;
+    img = renderer.readBack();
     img.metadata["specula:renderer"] = "preview (" + result.renderer + ")";
     img.metadata["specula:spp"] = "1";
     img.metadata["specula:version"] = SPECULA_VERSION;
     result.output.stats.samples = uint64_t(W) * H;
     result.output.stats.tilesDone = result.output.stats.tilesTotal = 1;
     result.output.stats.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
-
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
-    glDeleteQueries(1, &query);
-    glDeleteFramebuffers(1, &fbo);
-    glDeleteTextures(kAovCount, colour);
-    glDeleteRenderbuffers(1, &depth);
-    glDeleteBuffers(1, &frameBuffer);
-    if (mapTexture) glDeleteTextures(1, &mapTexture);
-    for (GpuMesh& m : meshes) {
-        glDeleteBuffers(1, &m.vbo);
-        glDeleteBuffers(1, &m.ebo);
-        glDeleteVertexArrays(1, &m.vao);
-    }
-    for (MaterialGpu& m : mats) glDeleteProgram(m.program);
-    glDeleteProgram(emitterProgram);
-    glDeleteProgram(backgroundProgram);
     return result;
 }
 

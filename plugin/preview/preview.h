@@ -32,7 +32,7 @@ struct PreviewOutput {
 
 // The scene's GPU state in the GL context current on the calling thread: one program per material (its module plus
 // the light loop), meshes, lights, shadow maps, the prefiltered environment. Draw as often as wanted, from any
-// camera, at any size; keep the context current and alive while the renderer lives.
+// camera, at any size; keep the context current and the scene alive while the renderer lives.
 class PreviewRenderer {
 public:
     // 'materials' is the scene document's "materials" object (the graphs the GLSL is emitted from); 'baseDir'

@@ -18,11 +18,11 @@ import numpy as np
 import OpenImageIO as oiio
 
 # Scenes whose preview does not yet match per pixel (docs/preview.md "Parity"), measured 2026-12-02: glints over
-# texture-filtered normal maps, LEAN planes at grazing footprints, the Cornell box's normal AOV (1.1 %).
+# texture-filtered normal maps, LEAN planes at grazing footprints.
 KNOWN_GAPS = {
     "demo", "glint/brushed_sphere", "glint/car_paint", "glint/horizon", "glint/tubes",
     "lean/plane_brushed_lean", "lean/plane_brushed_lean_norho", "lean/plane_brushed_naive",
-    "showcase/glint-carpaint", "showcase/glint-glitter", "cornell",
+    "showcase/glint-carpaint", "showcase/glint-glitter",
 }
 CHANNELS = {"beauty": ["R", "G", "B"], "diffuse": ["diffuse.R", "diffuse.G", "diffuse.B"],
             "specular": ["specular.R", "specular.G", "specular.B"], "normal": ["normal.X", "normal.Y", "normal.Z"]}
