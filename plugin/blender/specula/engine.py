@@ -29,7 +29,7 @@ AOV_CHANNELS = {"combined": ("R", "G", "B"),
                 "specular": ("specular.R", "specular.G", "specular.B"),
                 "normal": ("normal.X", "normal.Y", "normal.Z"),
                 "depth": ("depth.Z",)}
-CANCEL_GRACE_SECONDS = 0.6   # SIGTERM lets the CLI write its partial image; after this it is killed
+CANCEL_GRACE_SECONDS = 3.0   # SIGTERM lets the CLI finish loading and write its partial image; then killed
 
 # What the last render did, for tests and the UI: exit code, cancel latency, timings, warnings, paths.
 last_render = {}
