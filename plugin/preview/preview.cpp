@@ -40,7 +40,7 @@ struct FrameBlock {
 };
 
 const char* kFrameBlockGlsl = R"(
-layout(std140, binding = 1) uniform SpeculaPreviewFrame {
+layout(std140, binding = SPC_PREVIEW_FRAME_BINDING) uniform SpeculaPreviewFrame {
     mat4 spc_view_proj;
     vec4 spc_eye;
     vec4 spc_forward;
@@ -49,7 +49,8 @@ layout(std140, binding = 1) uniform SpeculaPreviewFrame {
 };
 )";
 
-const std::string kVertex = std::string("#version 450 core\n") + kFrameBlockGlsl + R"(
+// Without the #version line: versionHeader() puts it and the frame block's binding first.
+const std::string kVertex = std::string(kFrameBlockGlsl) + R"(
 layout(location = 0) in vec3 a_position;
 layout(location = 1) in vec3 a_normal;
 layout(location = 2) in vec4 a_tangent;
@@ -111,6 +112,9 @@ void main() {
     spc_preview_diffuse = vec3(0.0);
     spc_preview_specular = vec3(0.0);
     const float inf = 1.0 / 0.0;
+    // Every specula_material call is made in uniform control flow (the light count and kind and a material's
+    // partial answers are uniform): nodes take dFdxFine/dFdyFine of their own values (glint footprints, filtered
+    // lobes), which needs the whole 2x2 quad. A light that does not reach the point is dropped after the call.
     for (int i = 0; i < spc_counts.x; ++i) {
         vec4 h = spc_lights[5 * i];
         vec3 a = spc_lights[5 * i + 1].xyz, b = spc_lights[5 * i + 2].xyz, e = spc_lights[5 * i + 3].xyz;
@@ -119,29 +123,26 @@ void main() {
         if (kind <= 1) {  // point, spot
             vec3 d = a - P;
             float d2 = dot(d, d);
-            if (!(d2 > 0.0)) continue;
             float dist = sqrt(d2);
-            vec3 wi = d / dist;
-            if (dot(wi, s.geometric_normal) <= 0.0) continue;
+            vec3 wi = d2 > 0.0 ? d / dist : s.geometric_normal;
             float falloff = kind == 1 ? spc_preview_spot(dot(-wi, b), h.y, h.z) : 1.0;
-            if (falloff <= 0.0) continue;
             specula_material(specula_direction_query(wo, wi, dist), s, c);
-            spc_preview_add(c, value * (falloff / d2));
+            if (d2 > 0.0 && dot(wi, s.geometric_normal) > 0.0 && falloff > 0.0)
+                spc_preview_add(c, value * (falloff / d2));
         } else if (kind == 2) {  // directional: b = towards the light
-            if (dot(b, s.geometric_normal) <= 0.0) continue;
             specula_material(specula_direction_query(wo, b, inf), s, c);
-            spc_preview_add(c, value);
+            if (dot(b, s.geometric_normal) > 0.0) spc_preview_add(c, value);
         } else if (kind == 3) {  // quad: corner a, edges b and e (QuadLight::polygon's winding)
             vec3 n = normalize(cross(b, e));
             float side = dot(P - a, n);
-            if (side == 0.0 || (h.w == 0.0 && side < 0.0)) continue;
+            bool lit = !(side == 0.0 || (h.w == 0.0 && side < 0.0));
             vec3 p[4];
             if (side > 0.0) p = vec3[4](a, a + e, a + b + e, a + b);
             else p = vec3[4](a, a + b, a + b + e, a + e);
             for (int k = 0; k < 4; ++k) p[k] -= P;
             specula_material(specula_polygon_query(wo, p, 4, spc_counts.y), s, c);
             if (!c.partial) {
-                spc_preview_add(c, value);
+                if (lit) spc_preview_add(c, value);
                 continue;
             }
             vec3 ctr = (p[0] + p[1] + p[2] + p[3]) * 0.25;
@@ -150,9 +151,8 @@ void main() {
             vec3 nl = cross(b, e);
             float area = length(nl);
             float solid_angle = area * abs(dot(wi, nl / area)) / (dist * dist);
-            if (dot(wi, s.geometric_normal) <= 0.0) continue;
             specula_material(specula_direction_query(wo, wi, inf), s, c);
-            spc_preview_add(c, value * solid_angle);
+            if (lit && dot(wi, s.geometric_normal) > 0.0) spc_preview_add(c, value * solid_angle);
         } else {  // environment: its mean radiance over the hemisphere of the shading normal
             vec3 tt, bb, nn;
             spc_frame(s.normal, s.tangent.xyz, tt, bb, nn);
@@ -177,7 +177,7 @@ void main() {
 )";
 
 // Quad-light geometry: its radiance towards the viewer on the emitting side (QuadLight::radiance), no scattering.
-const std::string kEmitterFragment = std::string("#version 450 core\n") + kFrameBlockGlsl + R"(
+const std::string kEmitterFragment = std::string(kFrameBlockGlsl) + R"(
 layout(location = 0) in vec3 v_position;
 layout(location = 1) in vec3 v_normal;
 layout(location = 2) in vec4 v_tangent;
@@ -310,11 +310,15 @@ void packLight(const RasterLight& r, float (*dst)[4]) {
     dst[4][0] = r.value.x, dst[4][1] = r.value.y, dst[4][2] = r.value.z, dst[4][3] = 0.f;
 }
 
-std::string glslDefines() {
-    char buf[128];
-    std::snprintf(buf, sizeof buf, "#define SPC_PREVIEW_HEMISPHERE_LIFT %.9g\n", double(kRasterHemisphereLift));
+// The preview's own defines, after a module (or after versionHeader): the frame block's uniform-buffer binding and the
+// CPU's hemisphere lift (integrator.h).
+std::string glslDefines(int frameBinding) {
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "#define SPC_PREVIEW_FRAME_BINDING %d\n#define SPC_PREVIEW_HEMISPHERE_LIFT %.9g\n",
+                  frameBinding, double(kRasterHemisphereLift));
     return buf;
 }
+std::string versionHeader(int frameBinding) { return "#version 450 core\n" + glslDefines(frameBinding); }
 
 }  // namespace
 
@@ -325,6 +329,7 @@ struct PreviewRenderer::State {
     Color3 background{0.f};
     FrameBlock frame{};
     GLuint frameBuffer = 0;
+    int frameBinding = 0;  // the frame block's uniform-buffer binding: after every module's block
     struct MaterialGpu {
         GLuint program = 0;
         std::unique_ptr<gl::ManifestBindings> bindings;
@@ -409,8 +414,10 @@ PreviewRenderer::PreviewRenderer(const Scene& scene, const nlohmann::json& mater
     glBindBuffer(GL_UNIFORM_BUFFER, st.frameBuffer);
     glBufferData(GL_UNIFORM_BUFFER, sizeof st.frame, &st.frame, GL_DYNAMIC_DRAW);
 
-    // One program per material: its module (uniform block at binding 0, resources at 1, 2, ...) plus the light loop.
+    // One program per material: its module (its uniform block and resources where its manifest says) plus the light
+    // loop. The frame block takes the first uniform-buffer binding after every module's block.
     st.mats.resize(scene.materials.size());
+    std::vector<std::string> sources(scene.materials.size());
     for (size_t m = 0; m < scene.materials.size(); ++m) {
         const std::string& name = scene.materials[m]->name();
         const std::string pointer = "/materials/" + pointerEscape(name);
@@ -420,16 +427,26 @@ PreviewRenderer::PreviewRenderer(const Scene& scene, const nlohmann::json& mater
         for (const std::string& w : mod.warnings) st.warnings.push_back("material '" + name + "': " + w);
         std::vector<graph::ResourceImage> images =
             codegen::exportGlslResources(g, mod, GraphLoadContext{scene.textures.get(), baseDir});
+        const nlohmann::json manifest = codegen::glslManifest(mod, images, {});
+        if (manifest.contains("uniform_block") && manifest["uniform_block"].is_object())
+            st.frameBinding = std::max(st.frameBinding, manifest["uniform_block"].value("binding", 0) + 1);
+        st.mats[m].bindings = std::make_unique<gl::ManifestBindings>();
+        st.mats[m].bindings->add(manifest, images);
+        sources[m] = std::move(mod.source);
+    }
+    const std::string vertex = versionHeader(st.frameBinding) + kVertex;
+    for (size_t m = 0; m < scene.materials.size(); ++m) {
         // The module starts with its #version line; the defines and the main go after the whole module.
         std::string log;
-        st.mats[m].program = gl::program(kVertex, mod.source + glslDefines() + kSurfaceMain, &log);
-        if (!st.mats[m].program)
-            throw InputError(pointer, "the preview shader of material '" + name + "' does not compile: " + log);
-        st.mats[m].bindings = std::make_unique<gl::ManifestBindings>();
-        st.mats[m].bindings->add(codegen::glslManifest(mod, images, {}), images);
+        st.mats[m].program = gl::program(vertex, sources[m] + glslDefines(st.frameBinding) + kSurfaceMain, &log);
+        if (!st.mats[m].program) {
+            const std::string& name = scene.materials[m]->name();
+            throw InputError("/materials/" + pointerEscape(name),
+                             "the preview shader of material '" + name + "' does not compile: " + log);
+        }
     }
     std::string log;
-    st.emitterProgram = gl::program(kVertex, kEmitterFragment, &log);
+    st.emitterProgram = gl::program(vertex, versionHeader(st.frameBinding) + kEmitterFragment, &log);
     st.backgroundProgram = st.emitterProgram ? gl::program(kBackgroundVertex, kBackgroundFragment, &log) : 0;
     if (!st.backgroundProgram) throw IoError("the preview's own shaders do not compile: " + log);
     if (const RasterLight* map = st.map) {
@@ -493,7 +510,7 @@ double PreviewRenderer::draw(const CameraDesc& cameraDesc, int W, int H) {
     glDisable(GL_CULL_FACE);
     glClearDepth(1.0);
     glClear(GL_DEPTH_BUFFER_BIT);
-    glBindBufferBase(GL_UNIFORM_BUFFER, 1, st.frameBuffer);
+    glBindBufferBase(GL_UNIFORM_BUFFER, GLuint(st.frameBinding), st.frameBuffer);
     for (size_t i = 0; i < scene.shapes.size(); ++i) {
         const ShapeInstance& sh = scene.shapes[i];
         if (sh.areaLight >= 0) {
@@ -505,7 +522,7 @@ double PreviewRenderer::draw(const CameraDesc& cameraDesc, int W, int H) {
         } else {
             glUseProgram(st.mats[size_t(sh.material)].program);
             st.mats[size_t(sh.material)].bindings->bind();
-            glBindBufferBase(GL_UNIFORM_BUFFER, 1, st.frameBuffer);
+            glBindBufferBase(GL_UNIFORM_BUFFER, GLuint(st.frameBinding), st.frameBuffer);
         }
         glBindVertexArray(st.meshes[i].vao);
         glDrawElements(GL_TRIANGLES, st.meshes[i].indexCount, GL_UNSIGNED_INT, nullptr);
