@@ -15,27 +15,10 @@ import os
 import subprocess
 import sys
 
-import numpy as np
-import OpenImageIO as oiio
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from parity_metrics import channels, parity  # noqa: E402
 
-
-def read_rgb(path):
-    image = oiio.ImageInput.open(path)
-    if image is None:
-        raise OSError(oiio.geterror())
-    spec = image.spec()
-    px = np.asarray(image.read_image(0, 0, 0, spec.nchannels, oiio.FLOAT), dtype=np.float64)
-    image.close()
-    px = px.reshape(spec.height, spec.width, spec.nchannels)
-    names = list(spec.channelnames)
-    return px[:, :, [names.index(c) for c in ("R", "G", "B")]]
-
-
-def parity(cpu, gpu):
-    mean = np.abs(cpu).mean()
-    lx = np.abs(cpu).sum(axis=2)
-    rel = np.abs(cpu - gpu).sum(axis=2) / (lx + 0.01 * lx.mean())
-    return np.abs(cpu - gpu).mean() / mean, float(np.percentile(rel, 99))
+RGB = ("R", "G", "B")
 
 
 def run(cmd):
@@ -67,7 +50,7 @@ def main():
          "-o", os.path.join(out, "host.exr")])
     run([specula, "render", scene, "--integrator", "raster", "--resolution", size, "--progress", "none",
          "-o", os.path.join(out, "cpu.exr")])
-    cpu, gpu = read_rgb(os.path.join(out, "cpu.exr")), read_rgb(os.path.join(out, "host.exr"))
+    cpu, gpu = channels(os.path.join(out, "cpu.exr"), RGB), channels(os.path.join(out, "host.exr"), RGB)
     mad, p99 = parity(cpu, gpu)
     print("host vs specula render --integrator raster: mean|diff|/mean %.5f (<= 0.01), p99 relative %.5f (<= 0.05); "
           "mean beauty %.4f" % (mad, p99, cpu.mean()))
@@ -79,7 +62,7 @@ def main():
     # A member set by name must reach the shader: a green base instead of the red one.
     run([host, os.path.join(cooked, "module.glsl"), os.path.join(cooked, "manifest.json"), "--size", size,
          "--set", "u_base_color=0.1,0.5,0.1", "-o", os.path.join(out, "host_green.exr")])
-    green = read_rgb(os.path.join(out, "host_green.exr"))
+    green = channels(os.path.join(out, "host_green.exr"), RGB)
     changed, _ = parity(gpu, green)
     print("--set u_base_color=0.1,0.5,0.1: mean|diff|/mean %.3f (>= 0.2), green/red mean %.2f (> 1)"
           % (changed, green[:, :, 1].mean() / green[:, :, 0].mean()))
