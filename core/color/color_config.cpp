@@ -291,6 +291,30 @@ void ColorConfig::fromWorking(float* rgb, size_t pixelCount, const std::string& 
     convertWorking(*impl_, rgb, pixelCount, colorspace, true);
 }
 
+namespace {
+// Exposure (stops, a gain first) then the display's view: the one processor toDisplay and gpuDisplayShader share.
+OCIO::ConstProcessorRcPtr displayProcessor(const ColorConfig::Impl& I, const std::string& v, float exposureStops) {
+    try {
+        auto group = OCIO::GroupTransform::Create();
+        if (exposureStops != 0.f) {
+            double g = std::exp2(double(exposureStops));
+            double m44[16] = {g, 0, 0, 0, 0, g, 0, 0, 0, 0, g, 0, 0, 0, 0, 1};
+            auto mtx = OCIO::MatrixTransform::Create();
+            mtx->setMatrix(m44);
+            group->appendTransform(mtx);
+        }
+        auto dvt = OCIO::DisplayViewTransform::Create();
+        dvt->setSrc(I.working.c_str());
+        dvt->setDisplay(I.display.c_str());
+        dvt->setView(v.c_str());
+        group->appendTransform(dvt);
+        return I.config->getProcessor(group);
+    } catch (const OCIO::Exception& e) {
+        throw ColorError("cannot build display transform for view '" + v + "': " + e.what());
+    }
+}
+}  // namespace
+
 void ColorConfig::toDisplay(float* rgb, size_t pixelCount, const std::string& view, float exposureStops) const {
     std::string v = view.empty() ? impl_->view : view;
     if (!hasView(v)) throw ColorError(unknownNameMessage("view", v, impl_->viewNames(impl_->display)));
@@ -304,29 +328,68 @@ void ColorConfig::toDisplay(float* rgb, size_t pixelCount, const std::string& vi
         if (it != impl_->toDisplay.end()) {
             cpu = it->second;
         } else {
-            try {
-                auto group = OCIO::GroupTransform::Create();
-                if (exposureStops != 0.f) {
-                    double g = std::exp2(double(exposureStops));
-                    double m44[16] = {g, 0, 0, 0, 0, g, 0, 0, 0, 0, g, 0, 0, 0, 0, 1};
-                    auto mtx = OCIO::MatrixTransform::Create();
-                    mtx->setMatrix(m44);
-                    group->appendTransform(mtx);
-                }
-                auto dvt = OCIO::DisplayViewTransform::Create();
-                dvt->setSrc(impl_->working.c_str());
-                dvt->setDisplay(impl_->display.c_str());
-                dvt->setView(v.c_str());
-                group->appendTransform(dvt);
-                auto proc = impl_->config->getProcessor(group);
-                if (!proc->isNoOp()) cpu = proc->getOptimizedCPUProcessor(kOptimization);
-            } catch (const OCIO::Exception& e) {
-                throw ColorError("cannot build display transform for view '" + v + "': " + e.what());
-            }
+            auto proc = displayProcessor(*impl_, v, exposureStops);
+            if (!proc->isNoOp()) cpu = proc->getOptimizedCPUProcessor(kOptimization);
             impl_->toDisplay.emplace(key, cpu);
         }
     }
     applyCpu(cpu, rgb, pixelCount);
+}
+
+ColorConfig::GpuDisplayShader ColorConfig::gpuDisplayShader(const std::string& view, float exposureStops,
+                                                            const std::string& functionName,
+                                                            const std::string& resourcePrefix) const {
+    std::string v = view.empty() ? impl_->view : view;
+    if (!hasView(v)) throw ColorError(unknownNameMessage("view", v, impl_->viewNames(impl_->display)));
+    if (!std::isfinite(exposureStops)) throw ColorError("exposure must be finite");
+    GpuDisplayShader out;
+    out.functionName = functionName;
+    try {
+        std::lock_guard<std::mutex> lock(impl_->mutex);
+        auto proc = displayProcessor(*impl_, v, exposureStops);
+        OCIO::GpuShaderDescRcPtr desc = OCIO::GpuShaderDesc::CreateShaderDesc();
+        desc->setLanguage(OCIO::GPU_LANGUAGE_GLSL_4_0);
+        desc->setFunctionName(functionName.c_str());
+        desc->setResourcePrefix(resourcePrefix.c_str());
+        proc->getOptimizedGPUProcessor(kOptimization)->extractGpuShaderInfo(desc);
+        if (desc->getNumUniforms() != 0)
+            throw ColorError("view '" + v + "' has dynamic properties, which the GPU display path does not set");
+        out.glsl = desc->getShaderText();
+        for (unsigned i = 0; i < desc->getNumTextures(); ++i) {
+            const char *tex = nullptr, *sampler = nullptr;
+            unsigned w = 0, h = 0;
+            OCIO::GpuShaderDesc::TextureType channel;
+            OCIO::Interpolation interp;
+            desc->getTexture(i, tex, sampler, w, h, channel, interp);
+            const float* values = nullptr;
+            desc->getTextureValues(i, values);
+            GpuDisplayShader::Lut lut;
+            lut.samplerName = sampler;
+            lut.width = int(w), lut.height = int(h);
+            lut.channels = channel == OCIO::GpuShaderDesc::TEXTURE_RED_CHANNEL ? 1 : 3;
+            lut.linear = interp != OCIO::INTERP_NEAREST;
+            lut.values.assign(values, values + size_t(w) * h * size_t(lut.channels));
+            out.luts.push_back(std::move(lut));
+        }
+        for (unsigned i = 0; i < desc->getNum3DTextures(); ++i) {
+            const char *tex = nullptr, *sampler = nullptr;
+            unsigned edge = 0;
+            OCIO::Interpolation interp;
+            desc->get3DTexture(i, tex, sampler, edge, interp);
+            const float* values = nullptr;
+            desc->get3DTextureValues(i, values);
+            GpuDisplayShader::Lut lut;
+            lut.samplerName = sampler;
+            lut.width = lut.height = lut.depth = int(edge);
+            lut.channels = 3;
+            lut.linear = interp != OCIO::INTERP_NEAREST;
+            lut.values.assign(values, values + size_t(edge) * edge * edge * 3);
+            out.luts.push_back(std::move(lut));
+        }
+    } catch (const OCIO::Exception& e) {
+        throw ColorError("cannot build the GPU display shader for view '" + v + "': " + e.what());
+    }
+    return out;
 }
 
 }  // namespace specula

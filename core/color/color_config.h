@@ -43,6 +43,23 @@ public:
     // In-place working-space -> display/view conversion of packed RGB, with exposure in stops applied first.
     void toDisplay(float* rgb, size_t pixelCount, const std::string& view, float exposureStops = 0.f) const;
 
+    // The same working-space -> display/view transform as GLSL 4.0 for a GPU (OCIO's GPU shader path), with the LUTs
+    // it samples; what toDisplay computes, up to the LUTs' texture interpolation. Throws ColorError.
+    struct GpuDisplayShader {
+        std::string glsl;          // declares its samplers (no bindings) and 'vec4 functionName(vec4 inPixel)'
+        std::string functionName;  // as asked
+        struct Lut {
+            std::string samplerName;
+            int width = 0, height = 0, depth = 0;  // depth > 0: a 3D LUT (edge³); height > 1: a 1D LUT folded into 2D
+            int channels = 1;                       // 1 (red) or 3 (RGB); 3D LUTs are RGB
+            bool linear = true;                     // linear, else nearest interpolation
+            std::vector<float> values;              // width·height·max(depth,1)·channels, x fastest
+        };
+        std::vector<Lut> luts;
+    };
+    GpuDisplayShader gpuDisplayShader(const std::string& view, float exposureStops, const std::string& functionName,
+                                      const std::string& resourcePrefix) const;
+
     struct Impl;
 
 private:

@@ -7,6 +7,7 @@
 #include "plugin/cli/nodes_command.h"
 #include "plugin/cli/preview_command.h"
 #include "plugin/cli/validation_cli.h"
+#include "plugin/cli/view_command.h"
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
@@ -231,6 +232,7 @@ int main(int argc, char** argv) {
     addNormalmapCommand(app, exitCode);
     // ---- preview: the GPU rasteriser over the generated GLSL (plugin/cli/preview_command.cpp) -------
     addPreviewCommand(app, exitCode);
+    addViewCommand(app, exitCode);
     addNodesCommand(app, exitCode);
 
     try {

@@ -13,12 +13,24 @@
 
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <sstream>
 
 namespace fs = std::filesystem;
 
 namespace specula {
+
+bool parseResolutionOption(const std::string& resolution, SceneOverrides& ov) {
+    if (resolution.empty()) return true;
+    char x = 0;
+    std::istringstream in(resolution);
+    if (!(in >> ov.width >> x >> ov.height) || x != 'x' || ov.width < 1 || ov.height < 1 || ov.width > 16384 ||
+        ov.height > 16384 || !in.eof()) {
+        std::fprintf(stderr, "specula: error: --resolution expects WxH within 1x1..16384x16384, got '%s'\n",
+                     resolution.c_str());
+        return false;
+    }
+    return true;
+}
 
 void addPreviewCommand(CLI::App& app, int& exitCode) {
     auto* cmd = app.add_subcommand("preview", "Rasterise a JSON scene on the GPU with the generated GLSL (OpenGL 4.5, "
@@ -33,29 +45,19 @@ void addPreviewCommand(CLI::App& app, int& exitCode) {
     cmd->add_flag("--json", json, "Print the timing as one JSON line on stdout");
     cmd->callback([&exitCode] {
         SceneOverrides ov;
-        if (!resolution.empty()) {
-            char x = 0;
-            std::istringstream in(resolution);
-            if (!(in >> ov.width >> x >> ov.height) || x != 'x' || ov.width < 1 || ov.height < 1 || ov.width > 16384 ||
-                ov.height > 16384 || !in.eof()) {
-                std::fprintf(stderr, "specula: error: --resolution expects WxH within 1x1..16384x16384, got '%s'\n",
-                             resolution.c_str());
-                exitCode = kExitUsage;
-                return;
-            }
+        if (!parseResolutionOption(resolution, ov)) {
+            exitCode = kExitUsage;
+            return;
         }
         if (outPath.empty()) outPath = fs::path(scenePath).stem().string() + ".preview.exr";
         try {
             checkOutputPath(outPath, scenePath);
-            Scene scene = loadScene(scenePath, ov);
+            preview::PreviewScene ps = preview::loadPreviewScene(scenePath, ov);
+            const Scene& scene = ps.scene;
             for (const std::string& w : scene.warnings) std::fprintf(stderr, "specula: warning: %s\n", w.c_str());
-            std::ifstream f(scenePath, std::ios::binary);
-            nlohmann::json doc = nlohmann::json::parse(f);  // valid: the loader accepted it
-            const nlohmann::json materials = doc.contains("materials") ? doc["materials"] : nlohmann::json::object();
             preview::PreviewOptions po;
             po.frames = frames;
-            preview::PreviewOutput out =
-                preview::renderPreview(scene, materials, fs::path(scenePath).parent_path().string(), po);
+            preview::PreviewOutput out = preview::renderPreview(scene, ps.materials, ps.baseDir, po);
             for (const std::string& w : out.warnings) std::fprintf(stderr, "specula: warning: %s\n", w.c_str());
             WrittenFiles written = writeRenderResult(outPath, scene, out.output.images, out.output.stats);
             if (json) {

@@ -6,7 +6,14 @@ namespace CLI {
 class App;
 }
 
+#include "core/scene/scene_loader.h"
+
+#include <string>
+
 namespace specula {
+
+// --resolution WxH of `preview` and `view` into ov.width/height ("" leaves them); false after printing the usage error.
+bool parseResolutionOption(const std::string& resolution, SceneOverrides& ov);
 
 // Registers `preview SCENE.json [-o OUT.exr] [--resolution WxH] [--frames N] [--json]`; the callback stores its exit
 // code (kExitOk, kExitBadInput, kExitUsage, kExitIo) in 'exitCode'.

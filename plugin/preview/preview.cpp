@@ -19,6 +19,9 @@
 
 #include <algorithm>
 #include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -486,6 +489,9 @@ PreviewRenderer::~PreviewRenderer() {
 const std::vector<std::string>& PreviewRenderer::warnings() const { return s_->warnings; }
 unsigned PreviewRenderer::beautyTexture() const { return s_->colour[0]; }
 unsigned PreviewRenderer::framebuffer() const { return s_->fbo; }
+unsigned PreviewRenderer::aovTexture(int attachment) const {
+    return attachment >= 0 && attachment < kAovCount ? s_->colour[attachment] : 0;
+}
 
 double PreviewRenderer::draw(const CameraDesc& cameraDesc, int W, int H) {
     State& st = *s_;
@@ -580,6 +586,20 @@ ImageSet PreviewRenderer::readBack() const {
     addAov("uv", {"U", "V"}, 4, 1);
     addAov("depth", {"Z"}, 4, 0);
     return img;
+}
+
+PreviewScene loadPreviewScene(const std::string& path, const SceneOverrides& overrides) {
+    std::ifstream f(path, std::ios::binary);
+    if (!f) throw IoError("cannot open scene file '" + path + "'");
+    std::stringstream text;
+    text << f.rdbuf();
+    PreviewScene ps;
+    ps.baseDir = std::filesystem::path(path).parent_path().string();
+    if (ps.baseDir.empty()) ps.baseDir = ".";
+    ps.scene = loadSceneFromString(text.str(), ps.baseDir, overrides, path);
+    const nlohmann::json doc = nlohmann::json::parse(text.str());  // valid: the loader accepted it
+    if (doc.contains("materials")) ps.materials = doc["materials"];
+    return ps;
 }
 
 PreviewOutput renderPreview(const Scene& scene, const nlohmann::json& materials, const std::string& baseDir,

@@ -4,16 +4,14 @@
 
 #include "core/render/camera.h"
 #include "core/render/renderer.h"
+#include "core/scene/scene.h"
+#include "core/scene/scene_loader.h"
 
 #include <nlohmann/json.hpp>
 
 #include <memory>
 #include <string>
 #include <vector>
-
-namespace specula {
-struct Scene;
-}
 
 namespace specula::preview {
 
@@ -46,6 +44,8 @@ public:
     // (0 when the driver's timer query gives nothing). Leaves the target bound as the draw framebuffer.
     double draw(const CameraDesc& camera, int width, int height);
     unsigned beautyTexture() const;  // GL texture name of the last draw's beauty (RGBA32F, linear, GL row 0 = bottom)
+    // The last draw's colour attachments: 0 beauty, 1 diffuse, 2 specular, 3 normal (xyz), 4 (depth, u, v).
+    unsigned aovTexture(int attachment) const;
     unsigned framebuffer() const;    // the AOV target's framebuffer object (attachment 0 = beauty)
     // The last draw's AOVs in the renderer's layout (beauty, diffuse, specular, normal, uv, depth; rows top first).
     ImageSet readBack() const;
@@ -55,6 +55,15 @@ private:
     struct State;
     std::unique_ptr<State> s_;
 };
+
+// A scene file as the preview needs it: the loaded scene, its document's "materials" (the graphs the GLSL is emitted
+// from) and the folder its relative paths resolve against. The file is read once (the two can never disagree).
+struct PreviewScene {
+    Scene scene;
+    nlohmann::json materials = nlohmann::json::object();
+    std::string baseDir;
+};
+PreviewScene loadPreviewScene(const std::string& path, const SceneOverrides& overrides = {});
 
 // One headless render: gl::context(), a PreviewRenderer, options.frames draws from the scene camera, read back.
 // Throws specula::Error (io) when there is no GL 4.5 context.
