@@ -377,13 +377,30 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
     return out;
 }
 
+const Integrator::RasterShadows& Integrator::rasterShadows() const {
+    std::call_once(shadowsOnce_, [this] {
+        auto sh = std::make_unique<RasterShadows>();
+        for (const auto& light : scene_.lights) sh->lights.push_back(light->raster());
+        sh->layout = planShadowMaps(scene_, sh->lights);
+        sh->texels = buildShadowMaps(scene_, accel_, sh->layout);
+        shadows_ = std::move(sh);
+    });
+    return *shadows_;
+}
+
 // The GPU preview's light transport on the CPU (docs/preview.md): what plugin/preview's fragment shader computes, so
-// that the two agree image for image. Unshadowed; delta lights by one direction query; quad lights by the closure's
-// polygon integral (LTC), or, when a lobe has no closed form, by a direction query towards the light's centre times
-// its solid angle; an environment by its mean radiance times the polygon integral over the hemisphere of the shading
-// normal (the directional albedo of LTC lobes), or f(wi = N)·π when a lobe has no closed form.
+// that the two agree image for image. Delta lights by one direction query times the visibility of the preview's shadow
+// maps (core/render/shadow_maps.h: the same maps, built here by one ray per texel centre, and the same lookup at the
+// tessellated point and its geometric normal); quad lights, unshadowed, by the closure's polygon integral (LTC), or,
+// when a lobe has no closed form, by a direction query towards the light's centre times its solid angle; an
+// environment, unshadowed, by its mean radiance times the polygon integral over the hemisphere of the shading normal
+// (the directional albedo of LTC lobes), or f(wi = N)·π when a lobe has no closed form.
 void Integrator::rasterLighting(const ShadingPoint& sp, const Closure& closure, SampleValue& out) const {
     const Vec3 wo = sp.wo;
+    const RasterShadows& shadows = rasterShadows();
+    auto visibility = [&](size_t li) {
+        return shadowVisibility(shadows.layout, shadows.texels.data(), int(li), sp.p, sp.ng);
+    };
     auto add = [&](const BsdfEval& f, const Color3& L) {
         out.diffuse += f.diffuse * L;
         out.specular += f.specular * L;
@@ -395,8 +412,9 @@ void Integrator::rasterLighting(const ShadingPoint& sp, const Closure& closure, 
         q.lightDistance = distance;
         return closure.evalPdf(q).f;
     };
-    for (const auto& light : scene_.lights) {
-        const RasterLight r = light->raster();
+    for (size_t li = 0; li < scene_.lights.size(); ++li) {
+        const Light* light = scene_.lights[li].get();
+        const RasterLight& r = shadows.lights[li];
         switch (r.kind) {
             case RasterLight::Kind::Point:
             case RasterLight::Kind::Spot: {
@@ -409,12 +427,16 @@ void Integrator::rasterLighting(const ShadingPoint& sp, const Closure& closure, 
                 float falloff = 1.f;
                 if (r.kind == RasterLight::Kind::Spot) falloff = rasterSpotFalloff(glm::dot(-wi, r.direction), r);
                 if (falloff <= 0.f) break;
-                add(direction(wi, dist), r.value * (falloff / d2));
+                const float vis = visibility(li);
+                if (vis > 0.f) add(direction(wi, dist), r.value * (falloff / d2) * vis);
                 break;
             }
-            case RasterLight::Kind::Directional:
-                if (glm::dot(r.direction, sp.ng) > 0.f) add(direction(r.direction, std::numeric_limits<float>::infinity()), r.value);
+            case RasterLight::Kind::Directional: {
+                if (!(glm::dot(r.direction, sp.ng) > 0.f)) break;
+                const float vis = visibility(li);
+                if (vis > 0.f) add(direction(r.direction, std::numeric_limits<float>::infinity()), r.value * vis);
                 break;
+            }
             case RasterLight::Kind::Quad: {
                 Vec3 poly[4];
                 Color3 Lp;

@@ -9,6 +9,10 @@
 #include "core/render/bsdf.h"
 #include "core/render/ray.h"
 #include "core/render/sampler.h"
+#include "core/render/shadow_maps.h"
+
+#include <memory>
+#include <mutex>
 
 namespace specula {
 
@@ -51,8 +55,16 @@ public:
 private:
     // Radiance arriving from escaped rays (sum over environment lights).
     Color3 environment(const Vec3& dir) const;
-    // render.integrator "raster": the GPU preview's unshadowed direct lighting at a camera hit (docs/preview.md).
+    // render.integrator "raster": the GPU preview's direct lighting at a camera hit, delta lights shadowed by the
+    // preview's shadow maps (docs/preview.md).
     void rasterLighting(const ShadingPoint& sp, const Closure& closure, SampleValue& out) const;
+    // The raster integrator's shadow maps, built by the first thread that needs them (once per render).
+    struct RasterShadows {
+        std::vector<RasterLight> lights;  // scene.lights[i]->raster()
+        ShadowLayout layout;
+        std::vector<float> texels;
+    };
+    const RasterShadows& rasterShadows() const;
     const Scene& scene_;
     const Accel& accel_;
     bool path_;
@@ -64,6 +76,8 @@ private:
     bool ltcLights_;            // render.area_lights == "ltc": polygon lights integrated by the lobes that can
     int ltcMaxDepth_;           // ... at path vertices up to this depth (0: camera hits), sampled deeper
     int ltcShadowRays_;         // shadow rays per analytic lobe and light (render.ltc_shadow_rays)
+    mutable std::once_flag shadowsOnce_;
+    mutable std::unique_ptr<RasterShadows> shadows_;
 };
 
 }  // namespace specula
