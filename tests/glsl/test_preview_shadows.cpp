@@ -1,6 +1,7 @@
 // Shadow maps of render.integrator "raster" and the GPU preview (docs/preview.md): a floor under a square occluder, lit
 // by a point, a spot and a directional light; the pixels known to be in the occluder's shadow are black on both sides,
 // lit pixels keep the unshadowed value, and the layout keeps its texel budget.
+#include "core/render/accel.h"
 #include "core/render/renderer.h"
 #include "core/render/shadow_maps.h"
 #include "core/scene/scene.h"
@@ -11,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <cstdio>
 
 using namespace specula;
 
@@ -148,4 +150,104 @@ TEST(PreviewShadows, LayoutKeepsTheTexelBudget) {
     EXPECT_EQ(mixed.layers(), 1);
     EXPECT_EQ(mixed.lights[0].mode, ShadowMode::None);
     EXPECT_EQ(mixed.lights[1].mode, ShadowMode::Ortho);
+}
+
+namespace {
+
+// A point or spot light at the origin inside a 5 m sphere, six 0.4 m spheres 2 m away along ±x, ±y, ±z: one shadow in
+// every cube face's direction.
+std::string enclosure(const std::string& light, const std::string& camera) {
+    std::string shapes = R"([{"type": "sphere", "radius": 5, "segments": 96, "material": "grey"})";
+    const char* centres[6] = {"[2, 0, 0]", "[-2, 0, 0]", "[0, 2, 0]", "[0, -2, 0]", "[0, 0, 2]", "[0, 0, -2]"};
+    for (const char* c : centres)
+        shapes += std::string(R"(, {"type": "sphere", "radius": 0.4, "segments": 48, "transform": {"translate": )") + c +
+                  R"(}, "material": "grey"})";
+    shapes += "]";
+    return R"({"version": 1,
+        "render": {"width": 64, "height": 48, "spp": 1, "integrator": "raster", "shadow_map_size": 512},
+        "camera": )" + camera + R"(,
+        "materials": {"grey": {"nodes": {"d": {"type": "bsdf.diffuse", "inputs": {"color": 0.5}}}, "output": "@d.bsdf"}},
+        "shapes": )" + shapes + R"(,
+        "lights": [)" + light + "]}";
+}
+
+const char* kEnclosureLights[] = {
+    R"({"type": "point", "position": [0, 0, 0], "power": 800})",
+    R"({"type": "spot", "position": [0, 0, 0], "look_at": [1, 0.2, 0.1], "cone_angle": 120, "blend": 0, "power": 800})",
+    R"({"type": "spot", "position": [0, 0, 0], "look_at": [1, 0.2, 0.1], "cone_angle": 175, "blend": 0, "power": 800})",
+};
+
+}  // namespace
+
+TEST(PreviewShadows, MapVisibilityMatchesShadowRaysInEveryDirection) {
+    // 20000 points of the enclosing sphere (a Fibonacci lattice of directions from the light): the CPU maps' lookup
+    // against an exact shadow ray to the light. They may differ only along shadow edges (within a texel or two).
+    const char* cam = R"({"position": [0, 0, 0.5], "look_at": [1, 0, 0.5]})";
+    for (const char* light : kEnclosureLights) {
+        SCOPED_TRACE(light);
+        Scene s = loadSceneFromString(enclosure(light, cam), kExamples);
+        Accel accel(s);
+        std::vector<RasterLight> lights{s.lights[0]->raster()};
+        const ShadowLayout layout = planShadowMaps(s, lights);
+        ASSERT_EQ(layout.layers(), std::string(light).find("175") != std::string::npos ||
+                                           std::string(light).find("point") != std::string::npos
+                                       ? 6
+                                       : 1);
+        const std::vector<float> texels = buildShadowMaps(s, accel, layout);
+        const int n = 20000;
+        int shadowed = 0, mismatched = 0, considered = 0;
+        for (int k = 0; k < n; ++k) {
+            const float z = 1.f - (2.f * k + 1.f) / n, r = std::sqrt(std::max(0.f, 1.f - z * z));
+            const float phi = 2.39996323f * k;
+            const Vec3 d(r * std::cos(phi), r * std::sin(phi), z);
+            if (lights[0].kind == RasterLight::Kind::Spot && glm::dot(d, glm::normalize(lights[0].direction)) <= lights[0].cosOuter)
+                continue;  // outside the cone: no light to shadow
+            // The wall's tessellated point in direction d, from outside, and its geometric normal towards the light.
+            RayDifferential in;
+            in.o = d * 6.f;
+            in.d = -d;
+            Hit hit;
+            ASSERT_TRUE(accel.intersect(in, hit));
+            const ShadingPoint sp = accel.shadingPoint(in, hit);
+            const Vec3 p = sp.p, ng = -sp.ng;
+            Ray toLight;
+            toLight.o = offsetRayOrigin(p, ng, -d);
+            toLight.d = glm::normalize(-toLight.o);
+            toLight.tMax = glm::length(toLight.o) * (1.f - 1e-4f);
+            const bool visible = !accel.occluded(toLight);
+            const float vis = shadowVisibility(layout, texels.data(), 0, p, ng);
+            ++considered;
+            shadowed += visible ? 0 : 1;
+            if (visible ? vis < 0.5f : vis > 0.5f) ++mismatched;
+        }
+        std::printf("shadow rays vs maps: %d of %d points shadowed, %d disagree (%s)\n", shadowed, considered, mismatched,
+                    light);
+        // Each small sphere hides (1 - cos(asin 0.2)) / 2 = 1 % of the directions; the cone sees at least one.
+        EXPECT_GT(shadowed, considered / 200);
+        EXPECT_LT(mismatched, considered / 200 + 1) << mismatched << " of " << considered << ", " << shadowed << " shadowed";
+    }
+}
+
+TEST(PreviewShadows, EnclosureImagesAgreeOnBothSidesInEveryDirection) {
+    // Six views out of the enclosure (the camera beside the light, so that shadows show): GPU and CPU per pixel.
+    const char* looks[6] = {"[3, -1, 0.8]", "[-3, -1, 0.8]", "[-1, 3, 0.8]", "[-1, -3, 0.8]", "[-1, -1, 3]", "[-1, -1, -3]"};
+    for (const char* light : kEnclosureLights) {
+        int dark = 0, differ = 0, total = 0;
+        for (const char* look : looks) {
+            SCOPED_TRACE(std::string(light) + " looking at " + look);
+            const Images img = render(enclosure(light, std::string(R"({"position": [-1, -1, 0.8], "look_at": )") + look +
+                                                           R"(, "up": [0.3, 0.2, 1], "fov": 90})"));
+            for (size_t i = 0; i < img.cpu.size(); i += 3) {
+                const float c = img.cpu[i] + img.cpu[i + 1] + img.cpu[i + 2];
+                const float g = img.gpu[i] + img.gpu[i + 1] + img.gpu[i + 2];
+                dark += c == 0.f ? 1 : 0;
+                differ += std::abs(c - g) > 1e-3f * std::max(c, 1e-2f) ? 1 : 0;
+                ++total;
+            }
+        }
+        SCOPED_TRACE(light);
+        std::printf("enclosure views: %d of %d pixels differ, %d black (shadow, or outside a cone) (%s)\n", differ, total, dark, light);
+        EXPECT_GT(dark, total / 200);  // shadows are in view
+        EXPECT_LT(differ, total / 100) << differ << " of " << total << " pixels differ, " << dark << " dark";
+    }
 }
