@@ -7,6 +7,8 @@
 #include "core/render/sampling.h"
 #include "core/scene/scene.h"
 
+#include <tbb/collaborative_call_once.h>
+
 #include <array>
 #include <limits>
 
@@ -23,7 +25,8 @@ Integrator::Integrator(const Scene& scene, const Accel& accel)
       diffScale_(std::max(0.125f, 1.f / std::sqrt(float(std::max(scene.render.spp, 1))))),
       ltcLights_(scene.render.areaLights == AreaLightMode::Ltc),
       ltcMaxDepth_(scene.render.ltcMaxDepth),
-      ltcShadowRays_(std::max(1, scene.render.ltcShadowRays)) {}
+      ltcShadowRays_(std::max(1, scene.render.ltcShadowRays)),
+      shadows_(std::make_unique<RasterShadowState>()) {}
 
 Color3 Integrator::environment(const Vec3& dir) const {
     Color3 L(0.f);
@@ -377,15 +380,21 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
     return out;
 }
 
+struct Integrator::RasterShadowState {
+    tbb::collaborative_once_flag once;
+    RasterShadows maps;
+};
+
+Integrator::~Integrator() = default;
+
 const Integrator::RasterShadows& Integrator::rasterShadows() const {
-    std::call_once(shadowsOnce_, [this] {
-        auto sh = std::make_unique<RasterShadows>();
-        for (const auto& light : scene_.lights) sh->lights.push_back(light->raster());
-        sh->layout = planShadowMaps(scene_, sh->lights);
-        sh->texels = buildShadowMaps(scene_, accel_, sh->layout);
-        shadows_ = std::move(sh);
+    RasterShadowState& st = *shadows_;
+    tbb::collaborative_call_once(st.once, [&] {
+        for (const auto& light : scene_.lights) st.maps.lights.push_back(light->raster());
+        st.maps.layout = planShadowMaps(scene_, st.maps.lights);
+        st.maps.texels = buildShadowMaps(scene_, accel_, st.maps.layout);
     });
-    return *shadows_;
+    return st.maps;
 }
 
 // The GPU preview's light transport on the CPU (docs/preview.md): what plugin/preview's fragment shader computes, so
