@@ -443,7 +443,7 @@ std::string describeScene(const Scene& s) {
     for (auto& sh : s.shapes) tris += sh.mesh.triangleCount();
     o << "scene: " << s.sourcePath << "\n";
     o << "image: " << s.render.width << "x" << s.render.height << ", " << s.render.spp << " spp, seed " << s.render.seed
-      << ", " << (s.render.integrator == IntegratorKind::Path ? "path tracer (max depth " + std::to_string(s.render.maxDepth) + ")" : s.render.integrator == IntegratorKind::Raster ? std::string("raster (the GPU preview's lighting)") : std::string("direct lighting"))
+      << ", " << (s.render.integrator == IntegratorKind::Path ? "path tracer (max depth " + std::to_string(s.render.maxDepth) + ")" : s.render.integrator == IntegratorKind::Raster ? "raster (the GPU preview's lighting, shadow maps " + std::to_string(s.render.shadowMapSize) + " texels wide)" : std::string("direct lighting"))
       << ", " << (s.render.filter == PixelFilterKind::Box ? "box" : "gaussian") << " filter\n";
     o << "camera: position (" << s.camera.position.x << ", " << s.camera.position.y << ", " << s.camera.position.z
       << "), fov " << s.camera.fovDegrees << " deg (" << (s.camera.fovIsHorizontal ? "x" : "y") << ")\n";
