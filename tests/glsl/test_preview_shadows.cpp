@@ -154,11 +154,13 @@ TEST(PreviewShadows, LayoutKeepsTheTexelBudget) {
 
 namespace {
 
-// A point or spot light at the origin inside a 5 m sphere, six 0.4 m spheres 2 m away along ±x, ±y, ±z: one shadow in
-// every cube face's direction.
+// A point or spot light at the origin inside a 5 m sphere, six 0.4 m spheres about 2 m away towards ±x, ±y, ±z: one
+// shadow in every cube face's direction.
 std::string enclosure(const std::string& light, const std::string& camera) {
     std::string shapes = R"([{"type": "sphere", "radius": 5, "segments": 96, "material": "grey"})";
-    const char* centres[6] = {"[2, 0, 0]", "[-2, 0, 0]", "[0, 2, 0]", "[0, -2, 0]", "[0, 0, 2]", "[0, 0, -2]"};
+    // Off the face axes, so that a mirrored face or a swapped row order moves the shadows.
+    const char* centres[6] = {"[2, 0.5, 0.3]", "[-2, -0.4, 0.6]", "[0.3, 2, -0.5]", "[-0.6, -2, 0.2]", "[0.5, -0.3, 2]",
+                              "[-0.2, 0.6, -2]"};
     for (const char* c : centres)
         shapes += std::string(R"(, {"type": "sphere", "radius": 0.4, "segments": 48, "transform": {"translate": )") + c +
                   R"(}, "material": "grey"})";
@@ -181,7 +183,8 @@ const char* kEnclosureLights[] = {
 
 TEST(PreviewShadows, MapVisibilityMatchesShadowRaysInEveryDirection) {
     // 20000 points of the enclosing sphere (a Fibonacci lattice of directions from the light): the CPU maps' lookup
-    // against an exact shadow ray to the light. They may differ only along shadow edges (within a texel or two).
+    // against an exact shadow ray to the light. They may differ only along shadow edges (within a texel or two): measured
+    // 6, 2 and 5 points; a mirrored or misplaced face gives hundreds.
     const char* cam = R"({"position": [0, 0, 0.5], "look_at": [1, 0, 0.5]})";
     for (const char* light : kEnclosureLights) {
         SCOPED_TRACE(light);
@@ -224,12 +227,13 @@ TEST(PreviewShadows, MapVisibilityMatchesShadowRaysInEveryDirection) {
                     light);
         // Each small sphere hides (1 - cos(asin 0.2)) / 2 = 1 % of the directions; the cone sees at least one.
         EXPECT_GT(shadowed, considered / 200);
-        EXPECT_LT(mismatched, considered / 200 + 1) << mismatched << " of " << considered << ", " << shadowed << " shadowed";
+        EXPECT_LT(mismatched, considered / 1000 + 2) << mismatched << " of " << considered << ", " << shadowed << " shadowed";
     }
 }
 
 TEST(PreviewShadows, EnclosureImagesAgreeOnBothSidesInEveryDirection) {
     // Six views out of the enclosure (the camera beside the light, so that shadows show): GPU and CPU per pixel.
+    // Measured 6, 0 and 0 pixels; the GPU lookup with its rows flipped gives 1435, 55 and 576.
     const char* looks[6] = {"[3, -1, 0.8]", "[-3, -1, 0.8]", "[-1, 3, 0.8]", "[-1, -3, 0.8]", "[-1, -1, 3]", "[-1, -1, -3]"};
     for (const char* light : kEnclosureLights) {
         int dark = 0, differ = 0, total = 0;
@@ -248,6 +252,6 @@ TEST(PreviewShadows, EnclosureImagesAgreeOnBothSidesInEveryDirection) {
         SCOPED_TRACE(light);
         std::printf("enclosure views: %d of %d pixels differ, %d black (shadow, or outside a cone) (%s)\n", differ, total, dark, light);
         EXPECT_GT(dark, total / 200);  // shadows are in view
-        EXPECT_LT(differ, total / 100) << differ << " of " << total << " pixels differ, " << dark << " dark";
+        EXPECT_LT(differ, total / 1000) << differ << " of " << total << " pixels differ, " << dark << " dark";
     }
 }
