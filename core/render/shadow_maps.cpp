@@ -72,7 +72,8 @@ ShadowLayout planShadowMaps(const Scene& scene, const std::vector<RasterLight>& 
     }
     if (layers == 0) return layout;
     int size = std::clamp(scene.render.shadowMapSize, 16, 8192);
-    while (int64_t(size) * size * layers > kShadowMaxTexels && size > 16) size = std::max(16, int(std::sqrt(double(kShadowMaxTexels) / layers)));
+    if (int64_t(size) * size * layers > kShadowMaxTexels)  // the largest edge within the budget (floor of the root)
+        size = std::max(16, int(std::sqrt(double(kShadowMaxTexels) / layers)));
     layout.size = size;
 
     for (size_t i = 0; i < lights.size(); ++i) {
