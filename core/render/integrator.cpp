@@ -7,6 +7,8 @@
 #include "core/render/sampling.h"
 #include "core/scene/scene.h"
 
+#include <tbb/collaborative_call_once.h>
+
 #include <array>
 #include <limits>
 
@@ -23,7 +25,8 @@ Integrator::Integrator(const Scene& scene, const Accel& accel)
       diffScale_(std::max(0.125f, 1.f / std::sqrt(float(std::max(scene.render.spp, 1))))),
       ltcLights_(scene.render.areaLights == AreaLightMode::Ltc),
       ltcMaxDepth_(scene.render.ltcMaxDepth),
-      ltcShadowRays_(std::max(1, scene.render.ltcShadowRays)) {}
+      ltcShadowRays_(std::max(1, scene.render.ltcShadowRays)),
+      shadows_(std::make_unique<RasterShadowState>()) {}
 
 Color3 Integrator::environment(const Vec3& dir) const {
     Color3 L(0.f);
@@ -377,13 +380,36 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
     return out;
 }
 
+struct Integrator::RasterShadowState {
+    tbb::collaborative_once_flag once;
+    RasterShadows maps;
+};
+
+Integrator::~Integrator() = default;
+
+const Integrator::RasterShadows& Integrator::rasterShadows() const {
+    RasterShadowState& st = *shadows_;
+    tbb::collaborative_call_once(st.once, [&] {
+        for (const auto& light : scene_.lights) st.maps.lights.push_back(light->raster());
+        st.maps.layout = planShadowMaps(scene_, st.maps.lights);
+        st.maps.texels = buildShadowMaps(scene_, accel_, st.maps.layout);
+    });
+    return st.maps;
+}
+
 // The GPU preview's light transport on the CPU (docs/preview.md): what plugin/preview's fragment shader computes, so
-// that the two agree image for image. Unshadowed; delta lights by one direction query; quad lights by the closure's
-// polygon integral (LTC), or, when a lobe has no closed form, by a direction query towards the light's centre times
-// its solid angle; an environment by its mean radiance times the polygon integral over the hemisphere of the shading
-// normal (the directional albedo of LTC lobes), or f(wi = N)·π when a lobe has no closed form.
+// that the two agree image for image. Delta lights by one direction query times the visibility of the preview's shadow
+// maps (core/render/shadow_maps.h: the same maps, built here by one ray per texel centre, and the same lookup at the
+// tessellated point and its geometric normal); quad lights, unshadowed, by the closure's polygon integral (LTC), or,
+// when a lobe has no closed form, by a direction query towards the light's centre times its solid angle; an
+// environment, unshadowed, by its mean radiance times the polygon integral over the hemisphere of the shading normal
+// (the directional albedo of LTC lobes), or f(wi = N)·π when a lobe has no closed form.
 void Integrator::rasterLighting(const ShadingPoint& sp, const Closure& closure, SampleValue& out) const {
     const Vec3 wo = sp.wo;
+    const RasterShadows& shadows = rasterShadows();
+    auto visibility = [&](size_t li) {
+        return shadowVisibility(shadows.layout, shadows.texels.data(), int(li), sp.p, sp.ng);
+    };
     auto add = [&](const BsdfEval& f, const Color3& L) {
         out.diffuse += f.diffuse * L;
         out.specular += f.specular * L;
@@ -395,8 +421,9 @@ void Integrator::rasterLighting(const ShadingPoint& sp, const Closure& closure, 
         q.lightDistance = distance;
         return closure.evalPdf(q).f;
     };
-    for (const auto& light : scene_.lights) {
-        const RasterLight r = light->raster();
+    for (size_t li = 0; li < scene_.lights.size(); ++li) {
+        const Light* light = scene_.lights[li].get();
+        const RasterLight& r = shadows.lights[li];
         switch (r.kind) {
             case RasterLight::Kind::Point:
             case RasterLight::Kind::Spot: {
@@ -409,12 +436,16 @@ void Integrator::rasterLighting(const ShadingPoint& sp, const Closure& closure, 
                 float falloff = 1.f;
                 if (r.kind == RasterLight::Kind::Spot) falloff = rasterSpotFalloff(glm::dot(-wi, r.direction), r);
                 if (falloff <= 0.f) break;
-                add(direction(wi, dist), r.value * (falloff / d2));
+                const float vis = visibility(li);
+                if (vis > 0.f) add(direction(wi, dist), r.value * (falloff / d2) * vis);
                 break;
             }
-            case RasterLight::Kind::Directional:
-                if (glm::dot(r.direction, sp.ng) > 0.f) add(direction(r.direction, std::numeric_limits<float>::infinity()), r.value);
+            case RasterLight::Kind::Directional: {
+                if (!(glm::dot(r.direction, sp.ng) > 0.f)) break;
+                const float vis = visibility(li);
+                if (vis > 0.f) add(direction(r.direction, std::numeric_limits<float>::infinity()), r.value * vis);
                 break;
+            }
             case RasterLight::Kind::Quad: {
                 Vec3 poly[4];
                 Color3 Lp;

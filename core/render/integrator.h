@@ -9,6 +9,9 @@
 #include "core/render/bsdf.h"
 #include "core/render/ray.h"
 #include "core/render/sampler.h"
+#include "core/render/shadow_maps.h"
+
+#include <memory>
 
 namespace specula {
 
@@ -43,6 +46,7 @@ inline float rasterSpotFalloff(float cosAngle, const RasterLight& r) {
 class Integrator {
 public:
     Integrator(const Scene& scene, const Accel& accel);
+    ~Integrator();
     // Radiance along a camera ray. 'arena' is reset at every path vertex. With 'quad', the camera hit's differentials
     // are the fine finite differences to the quad partners' hits and sp.quad holds their shaded frames.
     SampleValue li(const RayDifferential& cameraRay, PixelSampler& sampler, ScratchArena& arena,
@@ -51,8 +55,18 @@ public:
 private:
     // Radiance arriving from escaped rays (sum over environment lights).
     Color3 environment(const Vec3& dir) const;
-    // render.integrator "raster": the GPU preview's unshadowed direct lighting at a camera hit (docs/preview.md).
+    // render.integrator "raster": the GPU preview's direct lighting at a camera hit, delta lights shadowed by the
+    // preview's shadow maps (docs/preview.md).
     void rasterLighting(const ShadingPoint& sp, const Closure& closure, SampleValue& out) const;
+    // The raster integrator's shadow maps, built once per render when a pixel first needs them; the threads that
+    // ask meanwhile help build them (tbb::collaborative_call_once).
+    struct RasterShadows {
+        std::vector<RasterLight> lights;  // scene.lights[i]->raster()
+        ShadowLayout layout;
+        std::vector<float> texels;
+    };
+    struct RasterShadowState;
+    const RasterShadows& rasterShadows() const;
     const Scene& scene_;
     const Accel& accel_;
     bool path_;
@@ -64,6 +78,7 @@ private:
     bool ltcLights_;            // render.area_lights == "ltc": polygon lights integrated by the lobes that can
     int ltcMaxDepth_;           // ... at path vertices up to this depth (0: camera hits), sampled deeper
     int ltcShadowRays_;         // shadow rays per analytic lobe and light (render.ltc_shadow_rays)
+    std::unique_ptr<RasterShadowState> shadows_;
 };
 
 }  // namespace specula

@@ -54,6 +54,9 @@ struct RenderSettings {
     // rays whose random pairs are half a period apart split the light between them: in penumbrae the 4-spp RMSE of
     // the CI scene drops from 0.53x to 0.22x of sampled's (tests/unit/test_ltc_render.cpp).
     int ltcShadowRays = 2;
+    // "shadow_map_size": texels per edge of each shadow map of the raster integrator and the GPU preview (one map per
+    // spot or directional light, a cube of six per point light; core/render/shadow_maps.h).
+    int shadowMapSize = 1024;
     std::optional<CropWindow> crop;
 };
 

@@ -53,7 +53,8 @@ std::string fileMustExist(const Context& ctx, const JsonReader& r, const std::st
 void readRender(const Json& j, Scene& s) {
     JsonReader r(j, "/render",
                  {"width", "height", "spp", "seed", "tile", "integrator", "max_depth", "filter", "gaussian_sigma2",
-                  "pixel_center", "clamp_indirect", "derivatives", "area_lights", "ltc_horizon", "ltc_max_depth", "ltc_shadow_rays"});
+                  "pixel_center", "clamp_indirect", "derivatives", "area_lights", "ltc_horizon", "ltc_max_depth", "ltc_shadow_rays",
+                  "shadow_map_size"});
     RenderSettings& rs = s.render;
     rs.width = r.integer("width", rs.width, 1, kMaxDimension);
     rs.height = r.integer("height", rs.height, 1, kMaxDimension);
@@ -79,6 +80,7 @@ void readRender(const Json& j, Scene& s) {
     rs.ltcHorizon = r.enumeration("ltc_horizon", "clip", {"clip", "clipless"}) == "clip" ? 0 : 1;
     rs.ltcMaxDepth = r.integer("ltc_max_depth", rs.ltcMaxDepth, 0, 1024);
     rs.ltcShadowRays = r.integer("ltc_shadow_rays", rs.ltcShadowRays, 1, 64);
+    rs.shadowMapSize = r.integer("shadow_map_size", rs.shadowMapSize, 16, 8192);
     if (int64_t(rs.width) * rs.height > kMaxPixels)
         r.fail("width", "image of " + std::to_string(rs.width) + "x" + std::to_string(rs.height) +
                             " pixels exceeds the limit of " + std::to_string(kMaxPixels) + " pixels");
@@ -441,7 +443,7 @@ std::string describeScene(const Scene& s) {
     for (auto& sh : s.shapes) tris += sh.mesh.triangleCount();
     o << "scene: " << s.sourcePath << "\n";
     o << "image: " << s.render.width << "x" << s.render.height << ", " << s.render.spp << " spp, seed " << s.render.seed
-      << ", " << (s.render.integrator == IntegratorKind::Path ? "path tracer (max depth " + std::to_string(s.render.maxDepth) + ")" : s.render.integrator == IntegratorKind::Raster ? std::string("raster (the GPU preview's lighting)") : std::string("direct lighting"))
+      << ", " << (s.render.integrator == IntegratorKind::Path ? "path tracer (max depth " + std::to_string(s.render.maxDepth) + ")" : s.render.integrator == IntegratorKind::Raster ? "raster (the GPU preview's lighting, shadow maps " + std::to_string(s.render.shadowMapSize) + " texels wide)" : std::string("direct lighting"))
       << ", " << (s.render.filter == PixelFilterKind::Box ? "box" : "gaussian") << " filter\n";
     o << "camera: position (" << s.camera.position.x << ", " << s.camera.position.y << ", " << s.camera.position.z
       << "), fov " << s.camera.fovDegrees << " deg (" << (s.camera.fovIsHorizontal ? "x" : "y") << ")\n";

@@ -10,6 +10,7 @@
 #include "core/render/camera.h"
 #include "core/render/integrator.h"
 #include "core/render/lights.h"
+#include "core/render/shadow_maps.h"
 #include "core/scene/scene.h"
 #include "core/util/error.h"
 #include "plugin/preview/gl_util.h"
@@ -31,7 +32,9 @@ namespace specula::preview {
 namespace {
 
 constexpr int kMaxLights = 64;
-constexpr int kLightVec4s = 5;  // per light: (kind, cos outer, cos inner, two-sided), position, direction, edge v, value
+// Per light: (kind, cos outer, cos inner, two-sided), position, direction, edge v, value, then its shadow map
+// (ShadowLight): (mode, first layer, scale, texel factor), origin, axis, right, up.
+constexpr int kLightVec4s = 10;
 constexpr int kAovCount = 5;    // beauty, diffuse, specular, normal, (depth, u, v)
 
 // The per-frame block shared by the vertex and fragment stages (std140: mat4, vec4s, ivec4, vec4 array).
@@ -48,7 +51,7 @@ layout(std140, binding = SPC_PREVIEW_FRAME_BINDING) uniform SpeculaPreviewFrame 
     vec4 spc_eye;
     vec4 spc_forward;
     ivec4 spc_counts;
-    vec4 spc_lights[64 * 5];
+    vec4 spc_lights[64 * 10];
 };
 )";
 
@@ -73,7 +76,7 @@ void main() {
 
 // Appended to a material's module: the shading point from the interpolated attributes (two-sided as on the CPU: the
 // frame faces the viewer), then every light by its closed form, as Integrator::rasterLighting.
-const std::string kSurfaceMain = std::string(kFrameBlockGlsl) + R"(
+const std::string kSurfaceMain = std::string(kFrameBlockGlsl) + shadowLookupGlsl() + R"(
 layout(location = 0) in vec3 v_position;
 layout(location = 1) in vec3 v_normal;
 layout(location = 2) in vec4 v_tangent;
@@ -118,10 +121,11 @@ void main() {
     // Every specula_material call is made in uniform control flow (the light count and kind and a material's
     // partial answers are uniform): nodes take dFdxFine/dFdyFine of their own values (glint footprints, filtered
     // lobes), which needs the whole 2x2 quad. A light that does not reach the point is dropped after the call.
+    // Shadows (delta lights) are looked up after the call, where the light reaches the point, and multiply its light.
     for (int i = 0; i < spc_counts.x; ++i) {
-        vec4 h = spc_lights[5 * i];
-        vec3 a = spc_lights[5 * i + 1].xyz, b = spc_lights[5 * i + 2].xyz, e = spc_lights[5 * i + 3].xyz;
-        vec3 value = spc_lights[5 * i + 4].xyz;
+        vec4 h = spc_lights[10 * i];
+        vec3 a = spc_lights[10 * i + 1].xyz, b = spc_lights[10 * i + 2].xyz, e = spc_lights[10 * i + 3].xyz;
+        vec3 value = spc_lights[10 * i + 4].xyz;
         int kind = int(h.x);
         if (kind <= 1) {  // point, spot
             vec3 d = a - P;
@@ -130,11 +134,18 @@ void main() {
             vec3 wi = d2 > 0.0 ? d / dist : s.geometric_normal;
             float falloff = kind == 1 ? spc_preview_spot(dot(-wi, b), h.y, h.z) : 1.0;
             specula_material(specula_direction_query(wo, wi, dist), s, c);
-            if (d2 > 0.0 && dot(wi, s.geometric_normal) > 0.0 && falloff > 0.0)
-                spc_preview_add(c, value * (falloff / d2));
+            if (d2 > 0.0 && dot(wi, s.geometric_normal) > 0.0 && falloff > 0.0) {
+                float vis = spc_shadow(spc_lights[10 * i + 5], spc_lights[10 * i + 6].xyz, spc_lights[10 * i + 9].xyz,
+                                       spc_lights[10 * i + 7].xyz, spc_lights[10 * i + 8].xyz, P, s.geometric_normal);
+                if (vis > 0.0) spc_preview_add(c, value * (falloff / d2) * vis);
+            }
         } else if (kind == 2) {  // directional: b = towards the light
             specula_material(specula_direction_query(wo, b, inf), s, c);
-            if (dot(b, s.geometric_normal) > 0.0) spc_preview_add(c, value);
+            if (dot(b, s.geometric_normal) > 0.0) {
+                float vis = spc_shadow(spc_lights[10 * i + 5], spc_lights[10 * i + 6].xyz, spc_lights[10 * i + 9].xyz,
+                                       spc_lights[10 * i + 7].xyz, spc_lights[10 * i + 8].xyz, P, s.geometric_normal);
+                if (vis > 0.0) spc_preview_add(c, value * vis);
+            }
         } else if (kind == 3) {  // quad: corner a, edges b and e (QuadLight::polygon's winding)
             vec3 n = normalize(cross(b, e));
             float side = dot(P - a, n);
@@ -249,6 +260,51 @@ void main() {
 }
 )";
 
+// Shadow maps (core/render/shadow_maps.h): each layer stores the depth along its view axis of the nearest surface at its
+// texel centres, interpolated world position minus the view origin dotted with the axis, as the CPU's rays compute it.
+const std::string kShadowVertex = std::string("#version 450 core\n") + R"(
+layout(location = 0) in vec3 a_position;
+layout(location = 0) uniform mat4 u_clip;
+layout(location = 0) out vec3 v_position;
+void main() {
+    v_position = a_position;
+    gl_Position = u_clip * vec4(a_position, 1.0);
+}
+)";
+const std::string kShadowFragment = std::string("#version 450 core\n") + R"(
+layout(location = 0) in vec3 v_position;
+layout(location = 1) uniform vec3 u_origin;
+layout(location = 2) uniform vec3 u_axis;
+layout(location = 0) out float o_depth;
+void main() {
+    precise float d = dot(v_position - u_origin, u_axis);
+    o_depth = d;
+}
+)";
+
+// A shadow view's clip transform: x, y = scale·(q·right, q·up), w = q·axis (perspective) or 1 (ortho), z mapping
+// [zNear, zFar] along the axis to [-1, 1]; q = p - origin. Column-major.
+void shadowClip(const ShadowView& v, float* out) {
+    const float n = v.zNear, f = v.zFar;
+    Vec3 rows[4];
+    float add[4];
+    rows[0] = v.right * v.scale, rows[1] = v.up * v.scale;
+    add[0] = add[1] = 0.f;
+    if (v.ortho) {
+        rows[2] = v.axis * (2.f / (f - n)), add[2] = -(f + n) / (f - n);
+        rows[3] = Vec3(0.f), add[3] = 1.f;
+    } else {
+        rows[2] = v.axis * ((f + n) / (f - n)), add[2] = -2.f * f * n / (f - n);
+        rows[3] = v.axis, add[3] = 0.f;
+    }
+    for (int i = 0; i < 4; ++i) {
+        out[0 * 4 + i] = rows[i].x;
+        out[1 * 4 + i] = rows[i].y;
+        out[2 * 4 + i] = rows[i].z;
+        out[3 * 4 + i] = -glm::dot(rows[i], v.origin) + add[i];
+    }
+}
+
 struct GpuMesh {
     GLuint vbo = 0, ebo = 0, vao = 0;
     GLsizei indexCount = 0;
@@ -303,7 +359,7 @@ void viewProjection(const PerspectiveCamera& cam, float zNear, float zFar, float
     }
 }
 
-void packLight(const RasterLight& r, float (*dst)[4]) {
+void packLight(const RasterLight& r, const ShadowLight& sh, float (*dst)[4]) {
     dst[0][0] = float(int(r.kind));
     dst[0][1] = r.cosOuter;
     dst[0][2] = r.cosInner;
@@ -311,17 +367,25 @@ void packLight(const RasterLight& r, float (*dst)[4]) {
     const Vec3 vs[3] = {r.position, r.direction, r.edgeV};
     for (int k = 0; k < 3; ++k) dst[1 + k][0] = vs[k].x, dst[1 + k][1] = vs[k].y, dst[1 + k][2] = vs[k].z, dst[1 + k][3] = 0.f;
     dst[4][0] = r.value.x, dst[4][1] = r.value.y, dst[4][2] = r.value.z, dst[4][3] = 0.f;
+    dst[5][0] = float(int(sh.mode)), dst[5][1] = float(sh.firstLayer), dst[5][2] = sh.scale, dst[5][3] = sh.texelFactor;
+    const Vec3 frame[4] = {sh.origin, sh.right, sh.up, sh.axis};
+    for (int k = 0; k < 4; ++k)
+        dst[6 + k][0] = frame[k].x, dst[6 + k][1] = frame[k].y, dst[6 + k][2] = frame[k].z, dst[6 + k][3] = 0.f;
 }
 
-// The preview's own defines, after a module (or after versionHeader): the frame block's uniform-buffer binding and the
-// CPU's hemisphere lift (integrator.h).
-std::string glslDefines(int frameBinding) {
-    char buf[160];
-    std::snprintf(buf, sizeof buf, "#define SPC_PREVIEW_FRAME_BINDING %d\n#define SPC_PREVIEW_HEMISPHERE_LIFT %.9g\n",
-                  frameBinding, double(kRasterHemisphereLift));
+// The preview's own defines, after a module (or after versionHeader): the frame block's uniform-buffer binding, the
+// shadow maps' texture unit and the CPU's hemisphere lift (integrator.h).
+std::string glslDefines(int frameBinding, int shadowBinding) {
+    char buf[200];
+    std::snprintf(buf, sizeof buf,
+                  "#define SPC_PREVIEW_FRAME_BINDING %d\n#define SPC_PREVIEW_SHADOW_BINDING %d\n"
+                  "#define SPC_PREVIEW_HEMISPHERE_LIFT %.9g\n",
+                  frameBinding, shadowBinding, double(kRasterHemisphereLift));
     return buf;
 }
-std::string versionHeader(int frameBinding) { return "#version 450 core\n" + glslDefines(frameBinding); }
+std::string versionHeader(int frameBinding, int shadowBinding) {
+    return "#version 450 core\n" + glslDefines(frameBinding, shadowBinding);
+}
 
 }  // namespace
 
@@ -333,6 +397,9 @@ struct PreviewRenderer::State {
     FrameBlock frame{};
     GLuint frameBuffer = 0;
     int frameBinding = 0;  // the frame block's uniform-buffer binding: after every module's block
+    int shadowBinding = 0;  // the shadow maps' texture unit: after every module's resources
+    ShadowLayout shadows;
+    GLuint shadowTexture = 0;  // GL_TEXTURE_2D_ARRAY of R32F, one layer per shadow view (a 1x1 dummy without any)
     struct MaterialGpu {
         GLuint program = 0;
         std::unique_ptr<gl::ManifestBindings> bindings;
@@ -350,7 +417,65 @@ struct PreviewRenderer::State {
     explicit State(const Scene& s) : scene(s) {}
     void makeTarget(int W, int H);
     void freeTarget();
+    void renderShadowMaps();
 };
+
+// Every layer of the shadow layout, once (the maps do not depend on the camera): all shapes but the quad lights'
+// emitters (drawn in their own pass, as the CPU's map rays pass through them), nearest surface by the depth test.
+void PreviewRenderer::State::renderShadowMaps() {
+    const int N = std::max(1, shadows.size), L = std::max(1, shadows.layers());
+    glGenTextures(1, &shadowTexture);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, shadowTexture);
+    glTexStorage3D(GL_TEXTURE_2D_ARRAY, 1, GL_R32F, N, N, L);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    const float empty[4] = {std::numeric_limits<float>::max(), 0.f, 0.f, 0.f};
+    if (shadows.layers() == 0) {
+        glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, 0, 1, 1, 1, GL_RED, GL_FLOAT, empty);
+        return;
+    }
+    std::string log;
+    const GLuint prog = gl::program(kShadowVertex, kShadowFragment, &log);
+    if (!prog) throw IoError("the preview's shadow-map shaders do not compile: " + log);
+    GLuint fb = 0, depthBuffer = 0;
+    glGenFramebuffers(1, &fb);
+    glBindFramebuffer(GL_FRAMEBUFFER, fb);
+    glGenRenderbuffers(1, &depthBuffer);
+    glBindRenderbuffer(GL_RENDERBUFFER, depthBuffer);
+    glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT32F, N, N);
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, depthBuffer);
+    glUseProgram(prog);
+    glViewport(0, 0, N, N);
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LESS);
+    glDisable(GL_CULL_FACE);
+    for (int layer = 0; layer < shadows.layers(); ++layer) {
+        const ShadowView& v = shadows.views[size_t(layer)];
+        glFramebufferTextureLayer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, shadowTexture, 0, layer);
+        glDrawBuffer(GL_COLOR_ATTACHMENT0);
+        if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+            throw IoError("the preview's shadow-map target is incomplete (" + std::to_string(N) + "x" + std::to_string(N) + ")");
+        glClearBufferfv(GL_COLOR, 0, empty);
+        glClearDepth(1.0);
+        glClear(GL_DEPTH_BUFFER_BIT);
+        float clip[16];
+        shadowClip(v, clip);
+        glUniformMatrix4fv(0, 1, GL_FALSE, clip);
+        glUniform3f(1, v.origin.x, v.origin.y, v.origin.z);
+        glUniform3f(2, v.axis.x, v.axis.y, v.axis.z);
+        for (size_t i = 0; i < scene.shapes.size(); ++i) {
+            if (scene.shapes[i].areaLight >= 0) continue;
+            glBindVertexArray(meshes[i].vao);
+            glDrawElements(GL_TRIANGLES, meshes[i].indexCount, GL_UNSIGNED_INT, nullptr);
+        }
+    }
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    glDeleteRenderbuffers(1, &depthBuffer);
+    glDeleteFramebuffers(1, &fb);
+    glDeleteProgram(prog);
+}
 
 void PreviewRenderer::State::freeTarget() {
     if (!fbo) return;
@@ -408,9 +533,10 @@ PreviewRenderer::PreviewRenderer(const Scene& scene, const nlohmann::json& mater
             }
         }
         if (count == kMaxLights) throw InputError("/lights", "the preview takes at most 64 lights");
-        packLight(r, &st.frame.lights[count * kLightVec4s]);
         ++count;
     }
+    st.shadows = planShadowMaps(scene, st.rasterLights);
+    for (int i = 0; i < count; ++i) packLight(st.rasterLights[size_t(i)], st.shadows.lights[size_t(i)], &st.frame.lights[i * kLightVec4s]);
     st.frame.counts[0] = count;
     st.frame.counts[1] = scene.render.ltcHorizon;
     glGenBuffers(1, &st.frameBuffer);
@@ -433,15 +559,18 @@ PreviewRenderer::PreviewRenderer(const Scene& scene, const nlohmann::json& mater
         const nlohmann::json manifest = codegen::glslManifest(mod, images, {});
         if (manifest.contains("uniform_block") && manifest["uniform_block"].is_object())
             st.frameBinding = std::max(st.frameBinding, manifest["uniform_block"].value("binding", 0) + 1);
+        if (manifest.contains("resources") && manifest["resources"].is_array())
+            for (const nlohmann::json& res : manifest["resources"])
+                st.shadowBinding = std::max(st.shadowBinding, res.value("binding", 0) + 1);
         st.mats[m].bindings = std::make_unique<gl::ManifestBindings>();
         st.mats[m].bindings->add(manifest, images);
         sources[m] = std::move(mod.source);
     }
-    const std::string vertex = versionHeader(st.frameBinding) + kVertex;
+    const std::string vertex = versionHeader(st.frameBinding, st.shadowBinding) + kVertex;
     for (size_t m = 0; m < scene.materials.size(); ++m) {
         // The module starts with its #version line; the defines and the main go after the whole module.
         std::string log;
-        st.mats[m].program = gl::program(vertex, sources[m] + glslDefines(st.frameBinding) + kSurfaceMain, &log);
+        st.mats[m].program = gl::program(vertex, sources[m] + glslDefines(st.frameBinding, st.shadowBinding) + kSurfaceMain, &log);
         if (!st.mats[m].program) {
             const std::string& name = scene.materials[m]->name();
             throw InputError("/materials/" + pointerEscape(name),
@@ -449,7 +578,7 @@ PreviewRenderer::PreviewRenderer(const Scene& scene, const nlohmann::json& mater
         }
     }
     std::string log;
-    st.emitterProgram = gl::program(vertex, versionHeader(st.frameBinding) + kEmitterFragment, &log);
+    st.emitterProgram = gl::program(vertex, versionHeader(st.frameBinding, st.shadowBinding) + kEmitterFragment, &log);
     st.backgroundProgram = st.emitterProgram ? gl::program(kBackgroundVertex, kBackgroundFragment, &log) : 0;
     if (!st.backgroundProgram) throw IoError("the preview's own shaders do not compile: " + log);
     if (const RasterLight* map = st.map) {
@@ -466,6 +595,7 @@ PreviewRenderer::PreviewRenderer(const Scene& scene, const nlohmann::json& mater
         glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
     }
     for (const ShapeInstance& sh : scene.shapes) st.meshes.push_back(uploadMesh(sh.mesh));
+    st.renderShadowMaps();
     glGenQueries(1, &st.query);
 }
 
@@ -476,6 +606,7 @@ PreviewRenderer::~PreviewRenderer() {
     glDeleteQueries(1, &st.query);
     glDeleteBuffers(1, &st.frameBuffer);
     if (st.mapTexture) glDeleteTextures(1, &st.mapTexture);
+    if (st.shadowTexture) glDeleteTextures(1, &st.shadowTexture);
     for (GpuMesh& m : st.meshes) {
         glDeleteBuffers(1, &m.vbo);
         glDeleteBuffers(1, &m.ebo);
@@ -517,6 +648,8 @@ double PreviewRenderer::draw(const CameraDesc& cameraDesc, int W, int H) {
     glClearDepth(1.0);
     glClear(GL_DEPTH_BUFFER_BIT);
     glBindBufferBase(GL_UNIFORM_BUFFER, GLuint(st.frameBinding), st.frameBuffer);
+    glActiveTexture(GLenum(GL_TEXTURE0 + st.shadowBinding));
+    glBindTexture(GL_TEXTURE_2D_ARRAY, st.shadowTexture);
     for (size_t i = 0; i < scene.shapes.size(); ++i) {
         const ShapeInstance& sh = scene.shapes[i];
         if (sh.areaLight >= 0) {

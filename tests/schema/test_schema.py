@@ -102,7 +102,7 @@ VALID = [
         "description": "every key",
         "render": {"width": 64, "height": 48, "spp": 1, "seed": 7, "tile": 16, "integrator": "direct", "max_depth": 0,
                    "filter": "gaussian", "gaussian_sigma2": 0.25, "pixel_center": True,
-                   "clamp_indirect": 10},
+                   "clamp_indirect": 10, "shadow_map_size": 256},
         "color": {"config": "builtin", "view": "Filmic", "exposure": -1.5},
         "camera": {"type": "perspective", "position": [0, -5, 1], "look_at": [0, 0, 1], "up": [0, 0, 1], "fov": 50,
                    "fov_axis": "y", "aperture_radius": 0.05, "focus_distance": 4},
@@ -205,6 +205,9 @@ INVALID = [
     ("env_rotation_too_large", light({"type": "environment", "file": "tex.ppm", "colorspace": "raw", "rotation": 4000}),
      "/lights/0/rotation"),
     ("clamp_indirect_negative", scene(render={"clamp_indirect": -1}), "/render/clamp_indirect"),
+    ("shadow_map_size_too_small", scene(render={"shadow_map_size": 8}), "/render/shadow_map_size"),
+    ("shadow_map_size_too_large", scene(render={"shadow_map_size": 8193}), "/render/shadow_map_size"),
+    ("shadow_map_size_not_integer", scene(render={"shadow_map_size": 512.5}), "/render/shadow_map_size"),
     # missing required keys
     ("missing_camera", scene(camera=None), "/"),
     ("missing_shapes", scene(shapes=None), "/"),
