@@ -156,9 +156,10 @@ struct Viewer {
 
     explicit Viewer(const ViewerOptions& o) : opt(o) {}
 
-    void load() {
+    // 'ps': the scene already read from its files (the first one, read before the window exists), else read here.
+    void load(std::unique_ptr<PreviewScene> ps = nullptr) {
         const auto t0 = Clock::now();
-        auto ps = std::make_unique<PreviewScene>(loadPreviewScene(opt.scenePath, opt.overrides));
+        if (!ps) ps = std::make_unique<PreviewScene>(loadPreviewScene(opt.scenePath, opt.overrides));
         auto renderer = std::make_unique<PreviewRenderer>(ps->scene, ps->materials, ps->baseDir);
         const bool first = !current.scene;
         const bool cameraChanged = first || !sameCamera(ps->scene.camera, current.scene->scene.camera);
@@ -346,13 +347,10 @@ int runViewer(const ViewerOptions& opt, const std::atomic<bool>& stop) {
     } terminate;
     int exitCode = kExitOk;
     try {
-        // The first size: the override, else the scene's resolution (read before the context exists: loading the
-        // scene needs no GL, building its renderer does).
-        int W = opt.overrides.width, H = opt.overrides.height;
-        if (W == 0 || H == 0) {
-            const Scene probe = loadScene(opt.scenePath, opt.overrides);
-            W = probe.render.width, H = probe.render.height;
-        }
+        // The scene is read before the context exists (reading needs no GL, building its renderer does): its
+        // resolution (or the override, which the loader applied) is the window's first size.
+        auto first = std::make_unique<PreviewScene>(loadPreviewScene(opt.scenePath, opt.overrides));
+        const int W = first->scene.render.width, H = first->scene.render.height;
         glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 4);
         glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 5);
         glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
@@ -369,7 +367,7 @@ int runViewer(const ViewerOptions& opt, const std::atomic<bool>& stop) {
         glfwSetScrollCallback(v.window, onScroll);
         glfwSetFramebufferSizeCallback(v.window, onResize);
         glfwSetWindowRefreshCallback(v.window, onRefresh);
-        v.load();
+        v.load(std::move(first));
         std::vector<fs::path> watched = watchedFiles(opt.scenePath, v.current.scene->baseDir);
         auto loadedSig = signature(watched), lastSig = loadedSig;
         auto nextPoll = Clock::now();
