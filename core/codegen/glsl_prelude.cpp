@@ -38,6 +38,14 @@ struct SpeculaShadingInputs {
 // SPC_HORIZON_CLIPLESS (1) = the clip-free sphere approximation (CPU: BsdfQuery::polygonHorizon, render.ltc_horizon).
 const int SPC_QUERY_DIRECTION = 0;
 const int SPC_QUERY_POLYGON = 1;
+// kind ENVIRONMENT (the split sum, docs/preview.md): a polygon query over the polygon standing for the hemisphere of
+// the shading normal whose LTC lobes each multiply their integral by spc_host_environment(dir, alpha), the radiance
+// of the prefiltered environment where the lobe's LTC points (spc_ltc_environment_lookup: its peak direction, world
+// space, and the GGX roughness of its peak; alpha < 0 asks for the irradiance E(n)/π, which diffuse lobes read at
+// their normal). The answer's f is then the environment's light, not an integral to be scaled. A host that has a
+// prefiltered environment defines SPECULA_HOST_ENVIRONMENT before the module and the function after it; otherwise the
+// function below answers 1, so f is the lobes' hemisphere integral, to be scaled by the environment's mean radiance.
+const int SPC_QUERY_ENVIRONMENT = 2;
 const int SPC_HORIZON_CLIP = 0;
 const int SPC_HORIZON_CLIPLESS = 1;
 struct SpeculaClosureQuery {
@@ -77,6 +85,18 @@ SpeculaClosureQuery specula_polygon_query(vec3 wo, vec3 polygon[4], int count, i
 SpeculaClosureQuery specula_polygon_query(vec3 wo, vec3 p0, vec3 p1, vec3 p2, vec3 p3, int count, int horizon) {
     return specula_polygon_query(wo, vec3[4](p0, p1, p2, p3), count, horizon);
 }
+// An environment query: hemisphere = the four directions of the polygon standing for the hemisphere of the shading
+// normal (CPU: Integrator::rasterLighting lifts the frame's ±T, ±B by kRasterHemisphereLift towards N).
+SpeculaClosureQuery specula_environment_query(vec3 wo, vec3 hemisphere[4], int horizon) {
+    SpeculaClosureQuery q = specula_polygon_query(wo, hemisphere, 4, horizon);
+    q.kind = SPC_QUERY_ENVIRONMENT;
+    return q;
+}
+#ifdef SPECULA_HOST_ENVIRONMENT
+vec3 spc_host_environment(vec3 dir, float alpha);
+#else
+vec3 spc_host_environment(vec3 dir, float alpha) { return vec3(1.0); }
+#endif
 
 // A closure's answer to a query: f = BSDF times cos(theta_i) (or its polygon integral), emission = emitted
 // radiance; partial = some lobe could not answer a polygon query (the host samples the closure for that light).

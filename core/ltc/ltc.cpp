@@ -63,6 +63,18 @@ Vec3 Ltc::sample(const Vec2& u) const {
     return glm::normalize(glm::inverse(invM) * wo);
 }
 
+void environmentLookup(const Ltc& ltc, Vec3& dir, float& alpha) {
+    const Vec3 m = glm::inverse(ltc.invM)[2];  // M·ẑ
+    const float len = glm::length(m), det = std::abs(glm::determinant(ltc.invM));
+    if (!(len > 0.f) || !(det > 0.f)) {
+        dir = Vec3(0.f, 0.f, 1.f);
+        alpha = 1.f;
+        return;
+    }
+    dir = m / len;
+    alpha = std::clamp(0.5f / (std::sqrt(det) * len * std::sqrt(len)), 0.f, 1.f);
+}
+
 double edgeIntegralExact(const DVec3& a, const DVec3& b) {
     DVec3 c = glm::cross(a, b);
     double s = glm::length(c);

@@ -27,6 +27,12 @@ struct Ltc {
     Vec3 sample(const Vec2& u) const;
 };
 
+// Where an LTC lobe reads the prefiltered environment (docs/preview.md): dir = M·ẑ normalised, the image of the
+// cosine's peak, and the GGX roughness whose reflected lobe (N = V = R) has the LTC's peak density,
+// D(dir) = |det M⁻¹| |M ẑ|³ / π = 1/(4π α²), i.e. α = 1 / (2 |det M⁻¹|^½ |M ẑ|^{3/2}), clamped to [0, 1]. Any scale of
+// invM gives the same. GLSL twin: spc_ltc_environment_lookup (nodes/shared/ltc.glsl).
+void environmentLookup(const Ltc& ltc, Vec3& dir, float& alpha);
+
 // ---- Building blocks (ltc-filtering.md §3) ----------------------------------------------------------------------
 
 // Exact edge term of Lambert's form factor for unit a, b: acos(a·b)·[(a×b)/|a×b|]_z / 2π (HDHN16 Eq. 11 per edge).
@@ -75,6 +81,10 @@ public:
     bool integratePolygon(const LobeQuery& q, const Vec3* vertices, int count, Color3& result) const override;
     bool samplePolygon(const LobeQuery& q, const Vec3* vertices, int count, const Vec2& u, uint64_t seed,
                        Vec3& wi) const override;
+    bool environmentLookup(const LobeQuery&, Vec3& dir, float& alpha) const override {
+        ltc::environmentLookup(ltc_, dir, alpha);
+        return true;
+    }
     const Ltc& ltc() const { return ltc_; }
 
 private:

@@ -39,6 +39,15 @@ public:
                        Vec3& wi) const override {
         return q.wo.z > 0.f && ltc::samplePolygon(polygonLtc(q.wo), vertices, count, u, seed, wi);
     }
+    bool environmentLookup(const LobeQuery& q, Vec3& dir, float& alpha) const override {
+        if (q.wo.z > 0.f) {
+            ltc::environmentLookup(polygonLtc(q.wo), dir, alpha);
+        } else {  // integratePolygon answers 0 here; any lookup will do
+            dir = Vec3(0.f, 0.f, 1.f);
+            alpha = 1.f;
+        }
+        return true;
+    }
     const Ltc& polygonLtc(const Vec3& wo) const {
         if (!(memoValid_ && wo == memoWo_)) {
             memo_ = static_cast<const Derived&>(*this).computePolygonLtc(wo);

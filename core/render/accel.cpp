@@ -7,6 +7,8 @@
 
 #include <embree3/rtcore.h>
 
+#include <algorithm>
+#include <cmath>
 #include <limits>
 #include <string>
 
@@ -23,8 +25,8 @@ static void embreeError(void*, RTCError code, const char* str) {
     (void)str;
 }
 
-Accel::Accel(const Scene& scene) : impl_(std::make_unique<Impl>()), scene_(scene) {
-    impl_->device = rtcNewDevice("threads=0");
+Accel::Accel(const Scene& scene, const char* embreeConfig) : impl_(std::make_unique<Impl>()), scene_(scene) {
+    impl_->device = rtcNewDevice(embreeConfig);
     if (!impl_->device) throw std::runtime_error("Embree: cannot create device");
     rtcSetDeviceErrorFunction(impl_->device, embreeError, nullptr);
     impl_->scene = rtcNewScene(impl_->device);
@@ -84,7 +86,37 @@ bool Accel::intersect(const Ray& ray, Hit& hit) const {
     hit.prim = rh.hit.primID;
     hit.b1 = rh.hit.u;
     hit.b2 = rh.hit.v;
+    refineHit(ray, hit);
     return true;
+}
+
+// Embree picks its kernels by the CPU's ISA at run time, and their t, u, v differ in the last bits between SSE,
+// AVX2 and AVX-512 (approximate reciprocals such as rcp14 vs rcp + Newton; other association orders), so the same
+// scene rendered on two machines differed slightly everywhere. Embree still decides *which* triangle is hit; the
+// hit's t and barycentrics are recomputed here from that triangle alone, in double precision with IEEE-rounded
+// scalar operations only (Möller & Trumbore 1997), so they are the same bits on every x86-64 machine.
+void Accel::refineHit(const Ray& ray, Hit& hit) const {
+    const TriangleMesh& m = scene_.shapes[hit.shape].mesh;
+    const glm::uvec3 idx = m.indices[hit.prim];
+    using D3 = glm::dvec3;
+    const D3 p0(m.positions[idx.x]), o(ray.o), d(ray.d);
+    const D3 e1 = D3(m.positions[idx.y]) - p0, e2 = D3(m.positions[idx.z]) - p0;
+    const D3 pv = glm::cross(d, e2);
+    const double det = glm::dot(e1, pv);
+    // Embree found a hit, so det is non-zero unless the ray grazes the plane; keep Embree's values then.
+    if (!(std::abs(det) > 1e-300)) return;
+    const double inv = 1.0 / det;
+    const D3 tv = o - p0, qv = glm::cross(tv, e1);
+    double u = glm::dot(tv, pv) * inv, v = glm::dot(d, qv) * inv;
+    const double t = glm::dot(e2, qv) * inv;
+    if (!std::isfinite(t) || !std::isfinite(u) || !std::isfinite(v)) return;
+    // Embree's watertight test accepted the hit; the recomputation can land a rounding step outside the triangle
+    // or the ray's interval, so clamp to both.
+    u = std::clamp(u, 0.0, 1.0);
+    v = std::clamp(v, 0.0, 1.0 - u);
+    hit.t = std::clamp(float(t), ray.tMin, ray.tMax);
+    hit.b1 = float(u);
+    hit.b2 = float(v);
 }
 
 bool Accel::occluded(const Ray& ray) const {

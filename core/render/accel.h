@@ -5,6 +5,7 @@
 #include "core/render/ray.h"
 #include "core/render/shading.h"
 
+#include <cstdint>
 #include <memory>
 
 namespace specula {
@@ -19,7 +20,8 @@ struct Hit {
 
 class Accel {
 public:
-    explicit Accel(const Scene& scene);
+    // embreeConfig: Embree's device configuration string (tests pin its ISA with "max_isa=sse4.2" and the like).
+    explicit Accel(const Scene& scene, const char* embreeConfig = "threads=0");
     ~Accel();
     Accel(const Accel&) = delete;
     Accel& operator=(const Accel&) = delete;
@@ -37,6 +39,9 @@ public:
     bool extrapolate(const Ray& ray, const Hit& on, Hit& out) const;
 
 private:
+    // t and barycentrics of Embree's hit recomputed from its triangle, the same bits on every CPU.
+    void refineHit(const Ray& ray, Hit& hit) const;
+
     struct Impl;
     std::unique_ptr<Impl> impl_;
     const Scene& scene_;

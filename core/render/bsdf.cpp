@@ -130,6 +130,28 @@ LobeMask Closure::integratePolygon(const BsdfQuery& q, const Vec3* vertices, int
     return done;
 }
 
+LobeMask Closure::integrateEnvironment(const BsdfQuery& q, const Vec3* hemisphere, int count,
+                                       const std::function<Color3(const Vec3&, float)>& radiance,
+                                       BsdfEval& out) const {
+    LobeMask done = 0;
+    Vec3 local[8];
+    if (count > 8) return 0;
+    for (int i = 0; i < count_; ++i) {
+        if (!((q.lobes >> i) & 1)) continue;
+        LobeQuery lq{frames_[i].toLocal(q.wo), frames_[i].toLocal(q.wo), q.lightDistance, q.polygonHorizon};
+        Vec3 dir;
+        float alpha;
+        if (!lobes_[i]->environmentLookup(lq, dir, alpha)) continue;
+        for (int k = 0; k < count; ++k) local[k] = frames_[i].toLocal(hemisphere[k]);
+        Color3 r;
+        if (!lobes_[i]->integratePolygon(lq, local, count, r)) continue;
+        const Color3 L = radiance(frames_[i].toWorld(dir), alpha);
+        (lobes_[i]->kind() == LobeKind::Diffuse ? out.diffuse : out.specular) += weights_[i] * r * L;
+        done |= LobeMask(1) << i;
+    }
+    return done;
+}
+
 bool Closure::samplePolygon(const BsdfQuery& q, int i, const Vec3* vertices, int count, const Vec2& u, uint64_t seed,
                             Vec3& wi) const {
     if (i < 0 || i >= count_ || count > 8) return false;

@@ -4,6 +4,7 @@
 
 #include "core/math/math.h"
 
+#include <functional>
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -102,6 +103,11 @@ public:
     virtual bool integratePolygon(const LobeQuery& q, const Vec3* vertices, int count, Color3& result) const {
         return false;
     }
+    // Split-sum environment lighting (the raster integrator and the GPU preview, docs/preview.md): where this lobe reads
+    // the prefiltered environment, its lookup direction (local frame, unit) and GGX roughness α (PrefilteredEnvironment:
+    // α < 0 reads the irradiance map). Lobes with integratePolygon and this get the environment as their hemisphere
+    // integral times that radiance; false (the default) leaves the lobe to the caller's estimate.
+    virtual bool environmentLookup(const LobeQuery& q, Vec3& dir, float& alpha) const { return false; }
     // For lobes with integratePolygon: a direction wi distributed in proportion to the integrand integratePolygon
     // integrates, restricted to the polygon (u: the first random pair; seed: for further tries). The shadow ratio
     // of Heitz, Hill & McGuire 2018 then needs one visibility test: E[integral·V(wi)] = the shadowed integral.
@@ -186,6 +192,14 @@ public:
     // perLobe (optional, kMaxLobes entries): each integrated lobe's weighted integral, for the shadow ratio.
     LobeMask integratePolygon(const BsdfQuery& q, const Vec3* vertices, int count, BsdfEval& out,
                               Color3* perLobe = nullptr) const;
+    // The split sum of an environment (docs/preview.md): Σ weight · lobe.integratePolygon(hemisphere) ·
+    // radiance(lobe's environmentLookup, in world space) over the lobes in q.lobes that have both, split by category,
+    // added to 'out' (radiance: PrefilteredEnvironment::lookup, the GLSL host's spc_host_environment). hemisphere:
+    // world-space directions of the polygon standing for the hemisphere of the shading normal. Returns the mask of the
+    // lobes so answered; the caller estimates the others.
+    LobeMask integrateEnvironment(const BsdfQuery& q, const Vec3* hemisphere, int count,
+                                  const std::function<Color3(const Vec3& dir, float alpha)>& radiance,
+                                  BsdfEval& out) const;
     // Lobe i's BsdfLobe::samplePolygon in world space (vertices: world offsets from the shading point).
     bool samplePolygon(const BsdfQuery& q, int i, const Vec3* vertices, int count, const Vec2& u, uint64_t seed,
                        Vec3& wi) const;

@@ -393,6 +393,10 @@ const Integrator::RasterShadows& Integrator::rasterShadows() const {
         for (const auto& light : scene_.lights) st.maps.lights.push_back(light->raster());
         st.maps.layout = planShadowMaps(scene_, st.maps.lights);
         st.maps.texels = buildShadowMaps(scene_, accel_, st.maps.layout);
+        st.maps.environments.resize(st.maps.lights.size());
+        for (size_t i = 0; i < st.maps.lights.size(); ++i)
+            if (st.maps.lights[i].kind == RasterLight::Kind::Environment)
+                st.maps.environments[i] = prefilterEnvironment(st.maps.lights[i]);
     });
     return st.maps;
 }
@@ -402,8 +406,10 @@ const Integrator::RasterShadows& Integrator::rasterShadows() const {
 // maps (core/render/shadow_maps.h: the same maps, built here by one ray per texel centre, and the same lookup at the
 // tessellated point and its geometric normal); quad lights, unshadowed, by the closure's polygon integral (LTC), or,
 // when a lobe has no closed form, by a direction query towards the light's centre times its solid angle; an
-// environment, unshadowed, by its mean radiance times the polygon integral over the hemisphere of the shading normal
-// (the directional albedo of LTC lobes), or f(wi = N)·π when a lobe has no closed form.
+// environment, unshadowed, by the split sum (core/render/environment_prefilter.h): each LTC lobe's polygon integral over
+// the hemisphere of the shading normal (its directional albedo) times the prefiltered environment where the lobe's LTC
+// points, at the roughness of its peak (the irradiance map for diffuse lobes); when a lobe has no closed form, the
+// closure's f(wi = N)·π times the irradiance at N.
 void Integrator::rasterLighting(const ShadingPoint& sp, const Closure& closure, SampleValue& out) const {
     const Vec3 wo = sp.wo;
     const RasterShadows& shadows = rasterShadows();
@@ -471,7 +477,7 @@ void Integrator::rasterLighting(const ShadingPoint& sp, const Closure& closure, 
                 break;
             }
             case RasterLight::Kind::Environment: {
-                if (maxComponent(r.value) <= 0.f) break;
+                if (!r.hasMap && maxComponent(r.value) <= 0.f) break;
                 const Vec3 t = sp.frame.t, b = sp.frame.b, nn = sp.frame.n;
                 const float eps = kRasterHemisphereLift;
                 Vec3 poly[4] = {glm::normalize(t + eps * nn), glm::normalize(b + eps * nn), glm::normalize(-t + eps * nn),
@@ -479,12 +485,14 @@ void Integrator::rasterLighting(const ShadingPoint& sp, const Closure& closure, 
                 BsdfQuery q;
                 q.wo = wo;
                 q.polygonHorizon = scene_.render.ltcHorizon;
+                const PrefilteredEnvironment& env = shadows.environments[li];
                 BsdfEval fa;
-                LobeMask analytic = closure.integratePolygon(q, poly, 4, fa);
+                LobeMask analytic = closure.integrateEnvironment(
+                    q, poly, 4, [&env](const Vec3& d, float alpha) { return env.lookup(d, alpha); }, fa);
                 if ((closure.allLobes() & ~analytic) == 0)
-                    add(fa, r.value);
+                    add(fa, Color3(1.f));
                 else
-                    add(direction(nn, std::numeric_limits<float>::infinity()), r.value * kPi);
+                    add(direction(nn, std::numeric_limits<float>::infinity()), env.lookup(nn, -1.f) * kPi);
                 break;
             }
         }

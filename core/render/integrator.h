@@ -3,6 +3,7 @@
 #pragma once
 
 #include "core/render/camera.h"
+#include "core/render/environment_prefilter.h"
 #include "core/render/lights.h"
 
 #include "core/render/accel.h"
@@ -64,6 +65,7 @@ private:
         std::vector<RasterLight> lights;  // scene.lights[i]->raster()
         ShadowLayout layout;
         std::vector<float> texels;
+        std::vector<PrefilteredEnvironment> environments;  // per light; the environment lights' split-sum maps
     };
     struct RasterShadowState;
     const RasterShadows& rasterShadows() const;

@@ -263,4 +263,15 @@ void spc_ltc_ggx_axes(sampler2D ltc_matrix, sampler2D ltc_amplitude, sampler2D l
 
 // The Schlick-equivalent reflectance of an LTC integral, F0·mag + (1 − F0)·fres with F0 = F(1) (ltc::fresnelScale,
 // ltc-filtering.md §2 "Magnitude and Fresnel"); F0 = 1 (no Fresnel) gives mag exactly.
+// Environment queries (SPC_QUERY_ENVIRONMENT): the host's prefiltered radiance where an LTC lobe of frame (T, B, N)
+// points (ltc::environmentLookup): the direction M·ẑ normalised and α = 1/(2 |det M⁻¹|^½ |M ẑ|^{3/2}) in [0, 1], the
+// GGX roughness whose reflected lobe has the LTC's peak density.
+vec3 spc_ltc_environment(mat3 invM, vec3 T, vec3 B, vec3 N) {
+    vec3 m = inverse(invM)[2];
+    float len = length(m), det = abs(determinant(invM));
+    if (!(len > 0.0) || !(det > 0.0)) return spc_host_environment(N, 1.0);
+    vec3 d = m / len;
+    float alpha = clamp(0.5 / (sqrt(det) * len * sqrt(len)), 0.0, 1.0);
+    return spc_host_environment(T * d.x + B * d.y + N * d.z, alpha);
+}
 vec3 spc_ltc_fresnel_scale(vec3 F0, vec2 magFres) { return F0 * magFres.x + (vec3(1.0) - F0) * magFres.y; }

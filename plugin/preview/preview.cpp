@@ -8,6 +8,7 @@
 #include "core/codegen/glsl_manifest.h"
 #include "core/graph/graph.h"
 #include "core/render/camera.h"
+#include "core/render/environment_prefilter.h"
 #include "core/render/integrator.h"
 #include "core/render/lights.h"
 #include "core/render/shadow_maps.h"
@@ -23,6 +24,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <stdexcept>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -91,6 +93,23 @@ vec3 spc_preview_diffuse, spc_preview_specular;
 void spc_preview_add(SpeculaClosure c, vec3 L) {
     spc_preview_diffuse += c.f_diffuse * L;
     spc_preview_specular += (c.f - c.f_diffuse) * L;
+}
+// The split sum's environment (core/render/environment_prefilter.h): the light being lit, then its prefiltered chain
+// (mip level α·(levels−1)) or irradiance map, row 0 = +z, read as PrefilteredEnvironment::lookup reads them.
+layout(binding = SPC_PREVIEW_ENV_BINDING) uniform sampler2D spc_env_specular;
+layout(binding = SPC_PREVIEW_ENV_BINDING + 1) uniform sampler2D spc_env_irradiance;
+vec3 spc_preview_env_value;
+bool spc_preview_env_map;
+float spc_preview_env_rotation;
+vec3 spc_host_environment(vec3 dir, float alpha) {
+    if (!spc_preview_env_map) return spc_preview_env_value;
+    float c = cos(spc_preview_env_rotation), s = sin(spc_preview_env_rotation);
+    vec3 r = vec3(c * dir.x + s * dir.y, -s * dir.x + c * dir.y, dir.z);  // environmentUv
+    float u = 0.5 - atan(r.y, -r.x) * 0.15915494309189535;
+    u -= floor(u);
+    vec2 uv = vec2(u, acos(clamp(r.z, -1.0, 1.0)) * 0.31830988618379067);
+    if (alpha < 0.0) return textureLod(spc_env_irradiance, uv, 0.0).rgb;
+    return textureLod(spc_env_specular, uv, clamp(alpha, 0.0, 1.0) * float(SPC_PREVIEW_ENV_LEVELS - 1)).rgb;
 }
 float spc_preview_spot(float c, float cos_outer, float cos_inner) {
     if (c >= cos_inner) return 1.0;
@@ -167,18 +186,21 @@ void main() {
             float solid_angle = area * abs(dot(wi, nl / area)) / (dist * dist);
             specula_material(specula_direction_query(wo, wi, inf), s, c);
             if (lit && dot(wi, s.geometric_normal) > 0.0) spc_preview_add(c, value * solid_angle);
-        } else {  // environment: its mean radiance over the hemisphere of the shading normal
+        } else {  // environment: the split sum over the hemisphere of the shading normal (h.y: has a map, h.z: its turn)
+            spc_preview_env_value = value;
+            spc_preview_env_map = h.y != 0.0;
+            spc_preview_env_rotation = h.z;
             vec3 tt, bb, nn;
             spc_frame(s.normal, s.tangent.xyz, tt, bb, nn);
             const float lift = SPC_PREVIEW_HEMISPHERE_LIFT;
             vec3 p[4] = vec3[4](normalize(tt + lift * nn), normalize(bb + lift * nn), normalize(-tt + lift * nn),
                                 normalize(-bb + lift * nn));
-            specula_material(specula_polygon_query(wo, p, 4, spc_counts.y), s, c);
+            specula_material(specula_environment_query(wo, p, spc_counts.y), s, c);
             if (!c.partial) {
-                spc_preview_add(c, value);
+                spc_preview_add(c, vec3(1.0));
             } else {
                 specula_material(specula_direction_query(wo, nn, inf), s, c);
-                spc_preview_add(c, value * 3.14159265358979);
+                spc_preview_add(c, spc_host_environment(nn, -1.0) * 3.14159265358979);
             }
         }
     }
@@ -361,8 +383,9 @@ void viewProjection(const PerspectiveCamera& cam, float zNear, float zFar, float
 
 void packLight(const RasterLight& r, const ShadowLight& sh, float (*dst)[4]) {
     dst[0][0] = float(int(r.kind));
-    dst[0][1] = r.cosOuter;
-    dst[0][2] = r.cosInner;
+    const bool env = r.kind == RasterLight::Kind::Environment;
+    dst[0][1] = env ? (r.hasMap ? 1.f : 0.f) : r.cosOuter;
+    dst[0][2] = env ? r.mapRotation : r.cosInner;
     dst[0][3] = r.twoSided ? 1.f : 0.f;
     const Vec3 vs[3] = {r.position, r.direction, r.edgeV};
     for (int k = 0; k < 3; ++k) dst[1 + k][0] = vs[k].x, dst[1 + k][1] = vs[k].y, dst[1 + k][2] = vs[k].z, dst[1 + k][3] = 0.f;
@@ -374,14 +397,24 @@ void packLight(const RasterLight& r, const ShadowLight& sh, float (*dst)[4]) {
 }
 
 // The preview's own defines, after a module (or after versionHeader): the frame block's uniform-buffer binding, the
-// shadow maps' texture unit and the CPU's hemisphere lift (integrator.h).
+// shadow maps' texture unit (the prefiltered environment's two follow it), the chain's levels and the CPU's hemisphere
+// lift (integrator.h).
 std::string glslDefines(int frameBinding, int shadowBinding) {
-    char buf[200];
+    char buf[300];
     std::snprintf(buf, sizeof buf,
                   "#define SPC_PREVIEW_FRAME_BINDING %d\n#define SPC_PREVIEW_SHADOW_BINDING %d\n"
+                  "#define SPC_PREVIEW_ENV_BINDING %d\n#define SPC_PREVIEW_ENV_LEVELS %d\n"
                   "#define SPC_PREVIEW_HEMISPHERE_LIFT %.9g\n",
-                  frameBinding, shadowBinding, double(kRasterHemisphereLift));
+                  frameBinding, shadowBinding, shadowBinding + 1, kEnvironmentLevels, double(kRasterHemisphereLift));
     return buf;
+}
+// A module with the preview's prefiltered environment: SPECULA_HOST_ENVIRONMENT defined right after its #version line,
+// before the prelude (which then declares spc_host_environment; kSurfaceMain defines it).
+std::string withHostEnvironment(const std::string& module) {
+    const size_t eol = module.find('\n');
+    if (eol == std::string::npos || module.compare(0, 8, "#version") != 0)
+        throw std::logic_error("a generated GLSL module does not start with its #version line");
+    return module.substr(0, eol + 1) + "#define SPECULA_HOST_ENVIRONMENT\n" + module.substr(eol + 1);
 }
 std::string versionHeader(int frameBinding, int shadowBinding) {
     return "#version 450 core\n" + glslDefines(frameBinding, shadowBinding);
@@ -418,7 +451,37 @@ struct PreviewRenderer::State {
     void makeTarget(int W, int H);
     void freeTarget();
     void renderShadowMaps();
+    // The environment map's split-sum textures (prefilterEnvironment, the CPU twin's data): the specular chain as the
+    // mip levels of one texture, read with GL_LINEAR_MIPMAP_LINEAR, and the irradiance map; row 0 = +z, u repeats.
+    GLuint envTextures[2] = {};
+    void uploadEnvironment(const PrefilteredEnvironment& env);
 };
+
+void PreviewRenderer::State::uploadEnvironment(const PrefilteredEnvironment& env) {
+    glGenTextures(2, envTextures);
+    auto upload = [](const EnvironmentImage& img, int level) {
+        std::vector<float> rgba(size_t(img.width) * img.height * 4, 1.f);
+        for (size_t i = 0; i < size_t(img.width) * img.height; ++i)
+            for (int c = 0; c < 3; ++c) rgba[i * 4 + size_t(c)] = img.rgb[i * 3 + size_t(c)];
+        glTexSubImage2D(GL_TEXTURE_2D, level, 0, 0, img.width, img.height, GL_RGBA, GL_FLOAT, rgba.data());
+    };
+    auto params = [](GLint minFilter, int maxLevel) {
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, minFilter);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_REPEAT);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_BASE_LEVEL, 0);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, maxLevel);
+    };
+    glBindTexture(GL_TEXTURE_2D, envTextures[0]);
+    glTexStorage2D(GL_TEXTURE_2D, GLsizei(env.levels.size()), GL_RGBA32F, env.levels[0].width, env.levels[0].height);
+    for (size_t k = 0; k < env.levels.size(); ++k) upload(env.levels[k], int(k));
+    params(GL_LINEAR_MIPMAP_LINEAR, int(env.levels.size()) - 1);
+    glBindTexture(GL_TEXTURE_2D, envTextures[1]);
+    glTexStorage2D(GL_TEXTURE_2D, 1, GL_RGBA32F, env.irradiance.width, env.irradiance.height);
+    upload(env.irradiance, 0);
+    params(GL_LINEAR, 0);
+}
 
 // Every layer of the shadow layout, once (the maps do not depend on the camera): all shapes but the quad lights'
 // emitters (drawn in their own pass, as the CPU's map rays pass through them), nearest surface by the depth test.
@@ -570,7 +633,8 @@ PreviewRenderer::PreviewRenderer(const Scene& scene, const nlohmann::json& mater
     for (size_t m = 0; m < scene.materials.size(); ++m) {
         // The module starts with its #version line; the defines and the main go after the whole module.
         std::string log;
-        st.mats[m].program = gl::program(vertex, sources[m] + glslDefines(st.frameBinding, st.shadowBinding) + kSurfaceMain, &log);
+        st.mats[m].program = gl::program(
+            vertex, withHostEnvironment(sources[m]) + glslDefines(st.frameBinding, st.shadowBinding) + kSurfaceMain, &log);
         if (!st.mats[m].program) {
             const std::string& name = scene.materials[m]->name();
             throw InputError("/materials/" + pointerEscape(name),
@@ -593,6 +657,7 @@ PreviewRenderer::PreviewRenderer(const Scene& scene, const nlohmann::json& mater
         glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, map->mapWidth, map->mapHeight, 0, GL_RGBA, GL_FLOAT, rgba.data());
         glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
         glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+        st.uploadEnvironment(prefilterEnvironment(*map));
     }
     for (const ShapeInstance& sh : scene.shapes) st.meshes.push_back(uploadMesh(sh.mesh));
     st.renderShadowMaps();
@@ -606,6 +671,7 @@ PreviewRenderer::~PreviewRenderer() {
     glDeleteQueries(1, &st.query);
     glDeleteBuffers(1, &st.frameBuffer);
     if (st.mapTexture) glDeleteTextures(1, &st.mapTexture);
+    if (st.envTextures[0]) glDeleteTextures(2, st.envTextures);
     if (st.shadowTexture) glDeleteTextures(1, &st.shadowTexture);
     for (GpuMesh& m : st.meshes) {
         glDeleteBuffers(1, &m.vbo);
@@ -650,6 +716,10 @@ double PreviewRenderer::draw(const CameraDesc& cameraDesc, int W, int H) {
     glBindBufferBase(GL_UNIFORM_BUFFER, GLuint(st.frameBinding), st.frameBuffer);
     glActiveTexture(GLenum(GL_TEXTURE0 + st.shadowBinding));
     glBindTexture(GL_TEXTURE_2D_ARRAY, st.shadowTexture);
+    for (int k = 0; k < 2; ++k) {
+        glActiveTexture(GLenum(GL_TEXTURE0 + st.shadowBinding + 1 + k));
+        glBindTexture(GL_TEXTURE_2D, st.envTextures[k]);
+    }
     for (size_t i = 0; i < scene.shapes.size(); ++i) {
         const ShapeInstance& sh = scene.shapes[i];
         if (sh.areaLight >= 0) {

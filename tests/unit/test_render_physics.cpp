@@ -218,6 +218,43 @@ std::string diffScene(const std::string& shape) {
 
 }  // namespace
 
+// Embree chooses SSE, AVX2 or AVX-512 kernels by the CPU at run time and their t, u, v differ in the last bits;
+// Accel recomputes them from the hit triangle, so a hit is the same bits on every machine (and images are too).
+// Pinning Embree's ISA on one machine stands in for running on machines of different ISAs.
+TEST(AccelDeterminism, HitsAreTheSameBitsForEveryEmbreeIsa) {
+    Scene s = sceneFrom(R"({"camera": {"position": [0.3, -4, 2.2], "look_at": [0, 0, 0.4], "fov": 40},
+        "materials": {"m": {"nodes": {"d": {"type": "bsdf.diffuse"}}, "output": "@d.bsdf"}},
+        "shapes": [{"type": "sphere", "radius": 1.2, "transform": {"translate": [0, 0, 0.4]}, "material": "m"},
+                   {"type": "torus", "major_radius": 1.5, "minor_radius": 0.3, "material": "m"},
+                   {"type": "quad", "size": [8, 8], "transform": {"translate": [0, 0, -1]}, "material": "m"}]})");
+    std::vector<std::vector<Hit>> hits;
+    std::vector<Ray> rays;
+    Rng rng{7};
+    for (int i = 0; i < 40000; ++i) {
+        Ray r;
+        r.o = Vec3(rng.next() * 8.f - 4.f, rng.next() * 8.f - 4.f, rng.next() * 6.f - 1.f) * 1.5f;
+        r.d = glm::normalize(Vec3(0.f, 0.f, 0.4f) + Vec3(rng.next(), rng.next(), rng.next()) - 0.5f - r.o);
+        rays.push_back(r);
+    }
+    for (const char* config : {"threads=1,max_isa=sse4.2", "threads=1,max_isa=avx2", "threads=0"}) {
+        Accel accel(s, config);
+        hits.emplace_back(rays.size());
+        for (size_t i = 0; i < rays.size(); ++i)
+            if (!accel.intersect(rays[i], hits.back()[i])) hits.back()[i].shape = ~0u;
+    }
+    size_t compared = 0, differing = 0;
+    for (size_t k = 1; k < hits.size(); ++k)
+        for (size_t i = 0; i < rays.size(); ++i) {
+            const Hit &a = hits[0][i], &b = hits[k][i];
+            if (a.shape == ~0u || a.shape != b.shape || a.prim != b.prim) continue;  // a tie on an edge: another triangle
+            ++compared;
+            differing += std::memcmp(&a.t, &b.t, sizeof(float)) || std::memcmp(&a.b1, &b.b1, sizeof(float)) ||
+                         std::memcmp(&a.b2, &b.b2, sizeof(float));
+        }
+    EXPECT_GT(compared, 40000u);
+    EXPECT_EQ(differing, 0u) << "of " << compared << " hits";
+}
+
 TEST(RayDifferentials, MatchFiniteDifferencesOnSphere) {
     Scene s = sceneFrom(diffScene(R"({"type": "sphere", "radius": 1.2, "transform": {"translate": [0, 0, 0.4]}, "material": "m"})"));
     DiffCheck dc = checkDifferentials(s, true);

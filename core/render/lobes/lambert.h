@@ -34,6 +34,12 @@ public:
                        Vec3& wi) const override {
         return q.wo.z > 0.f && ltc::samplePolygon(ltc::Ltc{}, vertices, count, u, seed, wi);
     }
+    // The cosine lobe reads the irradiance map at the normal.
+    bool environmentLookup(const LobeQuery&, Vec3& dir, float& alpha) const override {
+        dir = Vec3(0.f, 0.f, 1.f);
+        alpha = -1.f;
+        return true;
+    }
     const char* modelName() const override { return "lambert"; }
     void parameters(const LobeQuery&, LobeParameters& out) const override {
         out.push_back({"albedo", {albedo_.x, albedo_.y, albedo_.z}});

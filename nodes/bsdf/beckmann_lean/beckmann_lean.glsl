@@ -36,7 +36,7 @@ void spc_bsdf_beckmann_lean(SpeculaClosureQuery q, vec3 weight, float roughness,
     float v = 0.5 * al * al;
     float a = xx + v, b = yy + v, c = xy;
     float det = a * b - c * c;
-    if (q.kind == SPC_QUERY_POLYGON) {
+    if (q.kind != SPC_QUERY_DIRECTION) {  // polygon and environment queries
         vec3 T, B, N;
         spc_frame(normal, tangent, T, B, N);
         vec3 lo = spc_to_local(q.wo, T, B, N);
@@ -54,6 +54,7 @@ void spc_bsdf_beckmann_lean(SpeculaClosureQuery q, vec3 weight, float roughness,
         spc_ltc_local_polygon(q, T, B, N, p);
         float e = spc_ltc_integrate(invM, p, q.vertex_count, q.horizon, ltc_amplitude);
         bsdf.f = weight * (spc_ltc_fresnel_scale(spc_fresnel_f0(fresnel, f0, ior, eta, k), magFres) * e);
+        if (q.kind == SPC_QUERY_ENVIRONMENT) bsdf.f *= spc_ltc_environment(invM, T, B, N);
         return;
     }
     vec3 o, i, h;

@@ -7,11 +7,12 @@ void spc_bsdf_diffuse(SpeculaClosureQuery q, vec3 color, vec3 normal, vec3 tange
     vec3 T, B, N;
     spc_frame(normal, tangent, T, B, N);
     vec3 o = spc_to_local(q.wo, T, B, N);
-    if (q.kind == SPC_QUERY_POLYGON) {
+    if (q.kind != SPC_QUERY_DIRECTION) {  // polygon and environment queries (the latter: times the irradiance at N)
         if (o.z <= 0.0) return;
         vec3 p[4];
         spc_ltc_local_polygon(q, T, B, N, p);
         bsdf.f = color * spc_ltc_cosine_integral(p, q.vertex_count, q.horizon, ltc_amplitude);
+        if (q.kind == SPC_QUERY_ENVIRONMENT) bsdf.f *= spc_host_environment(N, -1.0);
         bsdf.f_diffuse = bsdf.f;
         return;
     }

@@ -23,7 +23,7 @@ void spc_bsdf_ggx(SpeculaClosureQuery q, vec3 weight, float roughness, float ani
     float alpha = roughness * roughness;
     float aspect = sqrt(max(1.0 - 0.9 * anisotropy, 0.0));
     float ax = max(alpha / aspect, 1e-4), ay = max(alpha * aspect, 1e-4);
-    if (q.kind == SPC_QUERY_POLYGON) {
+    if (q.kind != SPC_QUERY_DIRECTION) {  // polygon and environment queries
         vec3 T, B, N;
         spc_frame(normal, tangent, T, B, N);
         vec3 lo = spc_to_local(q.wo, T, B, N);
@@ -35,6 +35,7 @@ void spc_bsdf_ggx(SpeculaClosureQuery q, vec3 weight, float roughness, float ani
         spc_ltc_local_polygon(q, T, B, N, p);
         float e = spc_ltc_integrate(invM, p, q.vertex_count, q.horizon, ltc_amplitude);
         bsdf.f = weight * (spc_ltc_fresnel_scale(spc_fresnel_f0(fresnel, f0, ior, eta, k), magFres) * e);
+        if (q.kind == SPC_QUERY_ENVIRONMENT) bsdf.f *= spc_ltc_environment(invM, T, B, N);
         return;
     }
     vec3 o, i, h;

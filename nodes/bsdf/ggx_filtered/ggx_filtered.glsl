@@ -158,7 +158,7 @@ void spc_bsdf_ggx_filtered(SpeculaClosureQuery q, SpeculaShadingInputs s, vec3 w
                                                            vec3(0.0), vec3(0.0))
                                        : A;
     filtered_alpha = sqrt(vec2(Am.x, Am.z));
-    if (q.kind == SPC_QUERY_POLYGON) {
+    if (q.kind != SPC_QUERY_DIRECTION) {  // polygon and environment queries
         if (o.z <= 0.0) return;
         mat3 invM;
         vec2 magFres;
@@ -167,6 +167,7 @@ void spc_bsdf_ggx_filtered(SpeculaClosureQuery q, SpeculaShadingInputs s, vec3 w
         spc_ltc_local_polygon(q, T, B, N, p);
         float e = spc_ltc_integrate(invM, p, q.vertex_count, q.horizon, ltc_amplitude);
         bsdf.f = weight * (spc_ltc_fresnel_scale(f0, magFres) * e);
+        if (q.kind == SPC_QUERY_ENVIRONMENT) bsdf.f *= spc_ltc_environment(invM, T, B, N);
         return;
     }
     // Quad derivatives are taken before any divergent return (dFdxFine needs the whole quad).

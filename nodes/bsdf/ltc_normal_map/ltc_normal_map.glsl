@@ -224,12 +224,16 @@ void spc_bsdf_ltc_normal_map(SpeculaClosureQuery q, int convention, float roughn
     vec3 specTint = mag > 0.0 ? specAlbedo / mag : vec3(0.0);
     vec3 diffTint = diffuse_color * (vec3(1.0) - specAlbedo);
     if (o.z <= 0.0) return;  // also what the lobes answer for a view below the surface
-    if (q.kind == SPC_QUERY_POLYGON) {
+    if (q.kind != SPC_QUERY_DIRECTION) {  // polygon and environment queries
         vec3 p[4];
         spc_ltc_local_polygon(q, T, B, N, p);
-        if (mag > 0.0) bsdf.f += specTint * (mag * spc_ltc_integrate(specInv, p, q.vertex_count, q.horizon, ltc_amplitude));
+        bool env = q.kind == SPC_QUERY_ENVIRONMENT;
+        if (mag > 0.0)
+            bsdf.f += specTint * (mag * spc_ltc_integrate(specInv, p, q.vertex_count, q.horizon, ltc_amplitude)) *
+                      (env ? spc_ltc_environment(specInv, T, B, N) : vec3(1.0));
         if (diffMag > 0.0)
-            bsdf.f_diffuse = diffTint * (diffMag * spc_ltc_integrate(diffInv, p, q.vertex_count, q.horizon, ltc_amplitude));
+            bsdf.f_diffuse = diffTint * (diffMag * spc_ltc_integrate(diffInv, p, q.vertex_count, q.horizon, ltc_amplitude)) *
+                             (env ? spc_ltc_environment(diffInv, T, B, N) : vec3(1.0));
         bsdf.f += bsdf.f_diffuse;
         return;
     }

@@ -54,7 +54,7 @@ void spc_closure_coat(SpeculaClosureQuery q, SpeculaClosure base, float weight, 
     if (!(w > 0.0)) return;
     float a = max(r * r, 1e-4);
     vec3 o = spc_to_local(q.wo, T, B, N);
-    if (q.kind == SPC_QUERY_POLYGON) {  // GgxLobe::integratePolygon: the isotropic LTC times F0·mag + (1 − F0)·fres
+    if (q.kind != SPC_QUERY_DIRECTION) {  // GgxLobe::integratePolygon: the isotropic LTC times F0·mag + (1 − F0)·fres
         if (o.z <= 0.0) return;
         mat3 invM;
         vec2 magFres;
@@ -62,7 +62,8 @@ void spc_closure_coat(SpeculaClosureQuery q, SpeculaClosure base, float weight, 
         vec3 p[4];
         spc_ltc_local_polygon(q, T, B, N, p);
         float integral = spc_ltc_integrate(invM, p, q.vertex_count, q.horizon, ltc_amplitude);
-        bsdf.f += w * (spc_ltc_fresnel_scale(vec3(spc_fresnel_dielectric(1.0, eta)), magFres) * integral);
+        vec3 L = q.kind == SPC_QUERY_ENVIRONMENT ? spc_ltc_environment(invM, T, B, N) : vec3(1.0);
+        bsdf.f += w * (spc_ltc_fresnel_scale(vec3(spc_fresnel_dielectric(1.0, eta)), magFres) * integral) * L;
         return;
     }
     vec3 i = spc_to_local(q.wi, T, B, N);
