@@ -1,6 +1,8 @@
 // Light sampling: delta lights, area-sampled quads, importance-sampled environment maps.
 #include "core/render/lights.h"
 
+#include "core/render/environment_prefilter.h"
+
 #include "core/render/sampling.h"
 
 #include <limits>
@@ -136,14 +138,7 @@ EnvironmentLight::EnvironmentLight(std::vector<float> rgb, int width, int height
 // Blender's equirectangular convention (Cycles direction_to_equirectangular): u = 0.5 - atan2(y, -x)/(2π),
 // so the image centre (u = 0.5) looks along -x and u grows clockwise seen from above; v = 0 is +z.
 // 'rotation' turns the map about +z like a Mapping node's Z rotation.
-Vec2 EnvironmentLight::dirToUv(const Vec3& d) const {
-    float c = std::cos(rotation_), s = std::sin(rotation_);
-    Vec3 r(c * d.x + s * d.y, -s * d.x + c * d.y, d.z);  // rotate by -rotation
-    float u = 0.5f - std::atan2(r.y, -r.x) * kInv2Pi;
-    u -= std::floor(u);
-    float v = std::acos(std::clamp(r.z, -1.f, 1.f)) * kInvPi;
-    return {u, v};
-}
+Vec2 EnvironmentLight::dirToUv(const Vec3& d) const { return environmentUv(d, rotation_); }
 
 Vec3 EnvironmentLight::uvToDir(const Vec2& uv) const {
     float a = (0.5f - uv.x) * 2.f * kPi;

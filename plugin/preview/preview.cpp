@@ -105,7 +105,9 @@ vec3 spc_host_environment(vec3 dir, float alpha) {
     if (!spc_preview_env_map) return spc_preview_env_value;
     float c = cos(spc_preview_env_rotation), s = sin(spc_preview_env_rotation);
     vec3 r = vec3(c * dir.x + s * dir.y, -s * dir.x + c * dir.y, dir.z);  // environmentUv
-    float u = 0.5 - atan(r.y, -r.x) * 0.15915494309189535;
+    // GLSL leaves atan(0, 0) undefined; C++'s atan2(±0, −0) = ±π puts the exact poles at u = 0 (a plane facing +z reads
+    // there, and row 0 varies with u)
+    float u = (r.x == 0.0 && r.y == 0.0) ? 0.0 : 0.5 - atan(r.y, -r.x) * 0.15915494309189535;
     u -= floor(u);
     vec2 uv = vec2(u, acos(clamp(r.z, -1.0, 1.0)) * 0.31830988618379067);
     if (alpha < 0.0) return textureLod(spc_env_irradiance, uv, 0.0).rgb;
