@@ -176,6 +176,12 @@ class Cache:
         (how each cached file was made); extra: {sid: {...}} free-form."""
         man = {"schema": SCHEMA, "page": self.page, "generator": self.generator, "regenerate": self.regenerate,
                "renderer_version": renderer_version, "protocol": self.protocol, "probe": PROBE, "scenes": {}}
+        # Regenerating a subset of scenes (--scenes) must not drop the others' entries: keep them as they are (their
+        # probes are re-checked by check() like any other entry).
+        if os.path.exists(self.path):
+            with open(self.path) as fh:
+                kept = json.load(fh).get("scenes", {})
+            man["scenes"].update({sid: e for sid, e in kept.items() if sid not in self.scenes})
         for sid, s in self.scenes.items():
             probes = self.probes(specula, work, sid)
             entry = {"scene": s["scene"],
