@@ -204,7 +204,9 @@ struct NodeSpec {
     // A node whose CPU model cannot run on the GPU declares it here: gpuSubstitute says in one sentence what its GLSL
     // function computes instead (the emitter warns with it once per module, docs/nodes.md shows it), and
     // gpuSubstituteCpu is the CPU twin of that GLSL function, which the parity suite compares it against (cpu stays
-    // the model the renderer uses).
+    // the model the renderer uses). A node whose GLSL is its model less a CPU-only option (bsdf.glint's integrated
+    // quad lights) sets gpuSubstituteCpu alone: the raster integrator and the parity suite then run what the GLSL
+    // computes, and the emitter has nothing to warn about.
     std::string gpuSubstitute;
     CpuFn gpuSubstituteCpu = nullptr;
 

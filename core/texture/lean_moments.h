@@ -54,10 +54,13 @@ LeanStats leanStats(const LeanMoments& m, float strength = 1.f, bool flipY = fal
 constexpr float kLeanMaxSlope = 16.f;
 LeanMoments leanTexelMoments(Vec3 n);
 
+// The anisotropic probe count is ceil(Pmax/Pmin - kAnisoRatioSlack) (LeanPyramid::lookup; lean.glsl uses the same).
+inline constexpr float kAnisoRatioSlack = 1e-3f;
+
 enum class LeanFilter : uint8_t {
     None,         // bilinear on level 0 (footprint ignored): the full-resolution reference
     Trilinear,    // isotropic: λ = log2(max(|J1|, |J2|)) (texels), linear between levels floor(λ), floor(λ)+1
-    Anisotropic,  // EXT_texture_filter_anisotropic: N = min(ceil(Pmax/Pmin), maxAniso) trilinear probes along the
+    Anisotropic,  // EXT_texture_filter_anisotropic: N = min(ceil(Pmax/Pmin - slack), maxAniso) trilinear probes along the
                   // major axis at λ = log2(Pmax/N), equally weighted
 };
 enum class LeanWrap : uint8_t { Repeat, Clamp };

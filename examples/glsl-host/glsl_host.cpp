@@ -151,7 +151,7 @@ void main() {
     vec3 N = normalize(gl_FrontFacing ? v_normal : -v_normal);
     // The derivatives: specula_shading_inputs differences P, uv, N and wo over the 2x2 pixel quad (dFdxFine,
     // dFdyFine) into s.dPdx/dPdy, s.duvdx/duvdy, s.dNdx/dNdy, s.dwodx/dwody. Texture nodes filter with s.duvdx/duvdy
-    // (textureGrad), normal maps turn them into dN/dx, dN/dy, filtered GGX widens its lobe with them.
+    // (anisotropic probes at an explicit LOD), normal maps turn them into dN/dx, dN/dy, filtered GGX widens its lobe with them.
     SpeculaShadingInputs s = specula_shading_inputs(P, N, Ng, v_tangent, v_uv, wo);
 
     SpeculaClosure c;
@@ -263,7 +263,7 @@ Texture resourceTexture(const json& r, const fs::path& dir) {
             glTexImage2D(t.target, GLint(l), GL_RGBA32F, w, h, 0, GL_RGBA, GL_FLOAT, px.data());
     }
     if (r.at("generate_mipmaps").get<bool>()) {
-        glGenerateMipmap(t.target);  // image textures: the manifest lists level 0 only
+        glGenerateMipmap(t.target);  // a resource that lists level 0 only asks the host for the chain
     } else {
         glTexParameteri(t.target, GL_TEXTURE_BASE_LEVEL, 0);
         glTexParameteri(t.target, GL_TEXTURE_MAX_LEVEL, GLint(levels.size()) - 1);

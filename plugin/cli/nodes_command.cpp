@@ -214,7 +214,9 @@ const std::map<std::string, std::string>& nodeNotes() {
         {"texture.image",
          "`colorspace`: any OCIO name/alias or `raw`; `color` is converted to the working space. CPU: "
          "`TextureStore::sample` (OIIO TextureSystem, bilinear + anisotropic MIP filtering with the footprint, v = 0 "
-         "bottom). GLSL: `textureGrad(sampler, uv, duvdx, duvdy)`; the emitter declares the sampler."},
+         "bottom). GLSL: the host-built MIP chain (`GlMipChain`) read with `textureLod` at GL's LOD, in "
+         "EXT_texture_filter_anisotropic probes computed in the shader (up to 16; footprints within 0.1 % of "
+         "isotropic take one); the raster integrator runs the same filter on the CPU; the emitter declares the sampler."},
         {"texture.normal_map",
          "`normal` = normalize(x·T + y·sign·(N×T) + z·N) with (x, y, z) = 2·color − 1, x and y scaled by `strength`, "
          "T Gram-Schmidt-orthogonalised to N."},

@@ -17,6 +17,7 @@
 #include "glsl_harness.h"
 #include "nodes/bsdf/glint/glint_dictionary.h"
 
+#include <algorithm>
 #include <GL/gl.h>
 #include <GL/glext.h>
 #include <OpenImageIO/imageio.h>
@@ -239,9 +240,14 @@ ParityResult runParity(const NodeSpec& s, std::string* failure) {
                 for (int c = 0; c < 3; ++c) d[o + c] = rnd(0.f, 1.f);
             } else if (p.type == TypeDesc::String) {
                 // Neighbouring pixels of the parity grid hold unrelated samples, so screen-space finite
-                // differences are meaningless there: quad-derivative modes are pinned to their first value.
-                // Uniform ports (sampler state, derivative modes) keep their default for the whole grid.
-                d[o] = p.uniform ? 0.f : float(j % int(p.enumValues.size()));
+                // differences are meaningless there: derivative sources are pinned to "analytic" where a port
+                // offers it. Other uniform ports (sampler state) keep their first value for the whole grid.
+                if (p.uniform) {
+                    auto a = std::find(p.enumValues.begin(), p.enumValues.end(), "analytic");
+                    d[o] = a == p.enumValues.end() ? 0.f : float(a - p.enumValues.begin());
+                } else {
+                    d[o] = float(j % int(p.enumValues.size()));
+                }
             } else if (p.type == TypeDesc::Normal3 || (p.type == TypeDesc::Vector3 && p.binding == GeomBinding::T)) {
                 put3(o, randUnit(rng));
             } else if (p.uniform) {

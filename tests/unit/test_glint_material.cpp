@@ -116,4 +116,86 @@ TEST(GlintMaterial, FresnelModelsAndBaseColorScaleTheSameSparkles) {
     EXPECT_GT(sparkles, 2.0 * converged);
 }
 
+// The raster integrator runs what spc_bsdf_glint computes (NodeSpec::gpuSubstituteCpu): the GLSL has no polygon answer,
+// so quad_lights "integrated" gives one on the CPU model and none on its GPU twin; directions answer the same.
+TEST(GlintMaterial, GpuTwinLeavesQuadLightsToTheHostAsTheGlslDoes) {
+    const json mat{{"nodes", {{"g", {{"type", "bsdf.glint"}, {"inputs", {{"quad_lights", "integrated"}, {"ggaa", "off"}}}}}}},
+                   {"output", "@g.bsdf"}};
+    GraphLoadContext twin;
+    twin.gpuSubstitutes = true;
+    const std::shared_ptr<Material> cpuModel = loadGraphMaterial(mat, "/m", GraphLoadContext{});
+    const std::shared_ptr<Material> gpuTwin = loadGraphMaterial(mat, "/m", twin);
+    const Vec3 wo = glm::normalize(Vec3(0.3f, -0.2f, 0.9f));
+    const Vec3 quad[4] = {{-0.5f, -0.5f, 2.f}, {0.5f, -0.5f, 2.f}, {0.5f, 0.5f, 2.f}, {-0.5f, 0.5f, 2.f}};
+    LobeMask masks[2];
+    std::vector<Color3> dirs[2];
+    std::vector<Vec3> wis;
+    for (int k = 0; k < 64; ++k) wis.push_back(glm::normalize(Vec3(-wo.x + 0.02f * (k % 8), -wo.y + 0.02f * (k / 8), wo.z)));
+    for (int m = 0; m < 2; ++m) {
+        ScratchArena arena;
+        Closure cl;
+        (m == 0 ? cpuModel : gpuTwin)->shade(glintyPoint(wo), arena, cl);
+        BsdfQuery q;
+        q.wo = wo;
+        BsdfEval e;
+        masks[m] = cl.integratePolygon(q, quad, 4, e);
+        dirs[m] = evalAt(m == 0 ? *cpuModel : *gpuTwin, wo, wis);
+    }
+    EXPECT_NE(masks[0], 0u) << "the CPU model integrates the glints over the quad light";
+    EXPECT_EQ(masks[1], 0u) << "the GPU twin has no polygon answer, as spc_bsdf_glint";
+    int lit = 0;
+    for (size_t k = 0; k < wis.size(); ++k) {
+        lit += maxComponent(dirs[0][k]) > 0.f;
+        for (int ch = 0; ch < 3; ++ch) EXPECT_EQ(dirs[0][k][ch], dirs[1][k][ch]) << "direction " << k;
+    }
+    EXPECT_GT(lit, 0);
+}
+
+// GGAA derivative sources: "quad" (default) differences h against the 2x2-quad partners in their own frames, as
+// dFdxFine does on a GPU; "analytic" ignores the partners and equals the chain rule of a point without them.
+TEST(GlintMaterial, AnalyticDerivativesIgnoreTheQuadPartners) {
+    auto material = [](const char* source) {
+        return loadGraphMaterial(json{{"nodes", {{"g", {{"type", "bsdf.glint"},
+                                                         {"inputs", {{"derivatives", source}, {"log_density", 12}}}}}}},
+                                      {"output", "@g.bsdf"}},
+                                 "/m", GraphLoadContext{});
+    };
+    const Vec3 wo = glm::normalize(Vec3(0.4f, 0.1f, 0.9f));
+    std::vector<Vec3> wis;
+    for (int k = 0; k < 400; ++k)
+        wis.push_back(glm::normalize(Vec3(-wo.x + 0.01f * (k % 20 - 10), -wo.y + 0.01f * (k / 20 - 10), wo.z)));
+    auto eval = [&](const Material& m, bool partners) {
+        ShadingPoint sp = glintyPoint(wo);
+        sp.dndx = Vec3(0.01f, 0.f, 0.f);
+        sp.dndy = Vec3(0.f, 0.01f, 0.f);
+        if (partners) {  // partners whose frames are tilted far more than dndx says: a normal-mapped neighbourhood
+            for (int k = 0; k < 2; ++k) {
+                ShadingPoint::QuadNeighbour& nb = sp.quad[k];
+                nb.valid = true;
+                nb.sign = 1.f;
+                nb.p = sp.p + (k == 0 ? Vec3(0.01f, 0, 0) : Vec3(0, 0.01f, 0));
+                nb.wo = wo;
+                const Vec3 n = glm::normalize(Vec3(k == 0 ? 0.15f : 0.f, k == 1 ? -0.15f : 0.f, 1.f));
+                nb.frame = Frame::fromNormalTangent(n, Vec3(1, 0, 0));
+            }
+        }
+        ScratchArena arena;
+        Closure cl;
+        m.shade(sp, arena, cl);
+        std::vector<Color3> r;
+        for (const Vec3& wi : wis) r.push_back(test::query(cl, wo, wi).f.total());
+        return r;
+    };
+    const auto quad = material("quad"), analytic = material("analytic");
+    const auto quadWith = eval(*quad, true), quadWithout = eval(*quad, false);
+    const auto analyticWith = eval(*analytic, true), analyticWithout = eval(*analytic, false);
+    double quadMoved = 0;
+    for (size_t k = 0; k < wis.size(); ++k) {
+        for (int ch = 0; ch < 3; ++ch) EXPECT_EQ(analyticWith[k][ch], analyticWithout[k][ch]) << "direction " << k;
+        for (int ch = 0; ch < 3; ++ch) EXPECT_EQ(quadWithout[k][ch], analyticWithout[k][ch]) << "direction " << k;
+        quadMoved += std::abs(luminance(quadWith[k]) - luminance(quadWithout[k]));
+    }
+    EXPECT_GT(quadMoved, 0.0) << "quad GGAA did not read the partners";
+}
+
 }  // namespace

@@ -210,6 +210,27 @@ TEST(LeanMoments, FootprintSelectsTheMatchingLevel) {
     EXPECT_GT(vt, va);
 }
 
+// A footprint within kAnisoRatioSlack of isotropic takes one probe: derivative sources that differ by rounding (the
+// CPU's quad partners, a GPU's dFdx) must not flip a camera-facing surface between one probe at λ and two at λ − 1.
+TEST(LeanMoments, NearIsotropicFootprintTakesOneProbe) {
+    LeanPyramid P = LeanPyramid::fromNormalMap(generateNormalMap(NormalMapKind::Bumps, 128, 6));
+    const float d = 5.3f / 128;
+    double worst = 0, step = 0;
+    for (int i = 0; i < 50; ++i) {
+        Vec2 uv((i * 37 % 128 + 0.3f) / 128, (i * 91 % 128 + 0.6f) / 128);
+        LeanMoments iso = P.lookup(uv, Vec2(d, 0), Vec2(0, d), LeanFilter::Anisotropic);
+        for (float r : {1.f + 2e-4f, 1.f - 2e-4f, 1.f + 9e-4f}) {
+            LeanMoments near = P.lookup(uv, Vec2(d, 0), Vec2(0, d * r), LeanFilter::Anisotropic);
+            worst = std::max(worst, double(std::abs(near.xx - iso.xx) / iso.xx));
+        }
+        // Past the slack the EXT rule's step is back: two probes one level finer.
+        LeanMoments two = P.lookup(uv, Vec2(d, 0), Vec2(0, d * 1.01f), LeanFilter::Anisotropic);
+        step = std::max(step, double(std::abs(two.xx - iso.xx) / iso.xx));
+    }
+    EXPECT_LT(worst, 2e-3) << "a footprint 2e-4 from isotropic changed the filtered moments";
+    EXPECT_GT(step, 1e-2) << "the 1 -> 2 probe step disappeared";
+}
+
 TEST(LeanMoments, RecoversKnownCorrelation) {
     for (double rho : {-0.8, 0.0, 0.6}) {
         NormalMap m = correlatedMap(256, 0.3, 0.12, rho, 99);

@@ -52,10 +52,15 @@ float spc_glint_erfinv(float x) {
     return p * x;
 }
 
-// One marginal d of dictionary level k at u (texture units), unfiltered or with the GGAA gradients (S5.4).
+// One marginal d of dictionary level k at u (texture units), unfiltered or with the GGAA gradients (S5.4). The MIP
+// level is GL's isotropic rule mu = log2(64 max(|g1|, |g2|)) computed here exactly, as textureGrad1D does on the CPU:
+// textureGrad would leave it to the implementation, whose LOD approximation (llvmpipe's, a vendor's) shifts the blend
+// between two MIPs by up to a tenth of the value.
 float spc_glint_marginal(sampler1DArray dictionary, int k, int d, float u, bool ggaa, float g1, float g2) {
     vec2 tc = vec2(u, float(k * 64 + d / 3));
-    vec4 t = ggaa ? textureGrad(dictionary, tc, g1, g2) : textureLod(dictionary, tc, 0.0);
+    float rho = 64.0 * max(abs(g1), abs(g2));
+    float lod = (ggaa && rho > 1.0) ? min(log2(rho), 6.0) : 0.0;
+    vec4 t = textureLod(dictionary, tc, lod);
     int ch = d - 3 * (d / 3);
     return ch == 0 ? t.x : (ch == 1 ? t.y : t.z);
 }
@@ -132,7 +137,7 @@ vec3 spc_glint_frame_rotation(vec2 a, vec3 w) { return vec3(-a.x * w.z, -a.y * w
 
 void spc_bsdf_glint(SpeculaClosureQuery q, SpeculaShadingInputs s, sampler1DArray dictionary, vec3 weight, float sigma_x, float sigma_y, float rho,
                     float log_density, float relative_area, float density_jitter, float max_anisotropy, int ggaa,
-                    float kernel_scale, int derivative, int quad_lights, int fresnel, vec3 f0, float ior, vec3 eta, vec3 k,
+                    float kernel_scale, int derivative, int derivatives, int quad_lights, int fresnel, vec3 f0, float ior, vec3 eta, vec3 k,
                     vec3 base_color, vec2 lean_mean, vec3 lean_cov, vec3 normal,
                     vec3 tangent, vec2 uv, vec2 duvdx, vec2 duvdy, float uv_scale, vec3 dndx, vec3 dndy, out SpeculaClosure bsdf) {
     bsdf = spc_closure_none();
@@ -161,12 +166,42 @@ void spc_bsdf_glint(SpeculaClosureQuery q, SpeculaShadingInputs s, sampler1DArra
     }
     vec3 o = spc_to_local(wo, T, B, N);
     vec3 i = spc_to_local(wi, T, B, N);
-    // S0 rejections.
-    if (o.z <= 0.0 || i.z <= 0.0) return;
     vec3 hsum = o + i;
     float len = sqrt(dot(hsum, hsum));
+    vec3 h = len > 0.0 ? hsum / len : vec3(0.0, 0.0, 1.0);
+    // Quad GGAA derivatives (C21 §6.1): the GGAA quantity of h differenced across the 2x2 quad, each h in its own
+    // pixel's (normal-mapped, LEAN) frame with its own view and, for a point light, its own light direction, and this
+    // query's light otherwise (a direction query fixes wi: the light's centre, the environment's normal). The quad
+    // partner's frame, view and position come from dFdxFine/dFdyFine before any divergent return (they need the whole
+    // quad); pixel x even (odd) has its partner at +1 (-1). The CPU twin differences against its quad partners
+    // (GlintNeighbour, glint_bsdf.h) with the same rule.
+    bool quadDerivatives = ggaa == SPC_GLINT_GGAA_ON && derivatives == SPC_GLINT_DERIVATIVES_QUAD;
+    vec2 dqx = vec2(0.0), dqy = vec2(0.0);
+    bool quadValid[2] = bool[2](false, false);
+    if (quadDerivatives) {
+        vec3 dT[2] = vec3[2](dFdxFine(T), dFdyFine(T)), dB[2] = vec3[2](dFdxFine(B), dFdyFine(B));
+        vec3 dN[2] = vec3[2](dFdxFine(N), dFdyFine(N)), dWo[2] = vec3[2](dFdxFine(wo), dFdyFine(wo));
+        vec3 dP[2] = vec3[2](dFdxFine(s.position), dFdyFine(s.position));
+        vec2 side = vec2((int(gl_FragCoord.x) & 1) == 0 ? 1.0 : -1.0, (int(gl_FragCoord.y) & 1) == 0 ? 1.0 : -1.0);
+        bool pointLight = !isinf(q.light_distance) && q.light_distance > 0.0;
+        vec2 qSelf = derivative == SPC_GLINT_DERIVATIVE_PROJECTED_HALF ? h.xy : -h.xy / max(h.z, 1e-30);
+        for (int k = 0; k < 2; ++k) {
+            float sg = side[k];
+            vec3 woN = wo + sg * dWo[k];
+            vec3 wiN = pointLight ? normalize(wi * q.light_distance - sg * dP[k]) : wi;
+            vec3 hN = normalize(woN + wiN);
+            vec3 hl = vec3(dot(hN, T + sg * dT[k]), dot(hN, B + sg * dB[k]), dot(hN, N + sg * dN[k]));
+            if (hl.z > 0.0) {
+                vec2 qN = derivative == SPC_GLINT_DERIVATIVE_PROJECTED_HALF ? hl.xy : -hl.xy / hl.z;
+                quadValid[k] = true;
+                if (k == 0) dqx = (qN - qSelf) * sg;
+                else dqy = (qN - qSelf) * sg;
+            }
+        }
+    }
+    // S0 rejections.
+    if (o.z <= 0.0 || i.z <= 0.0) return;
     if (!(len > 0.0)) return;
-    vec3 h = hsum / len;
     float woh = dot(o, h), wih = dot(i, h);
     if (h.z <= 0.0 || woh <= 0.0 || wih <= 0.0) return;
 
@@ -187,25 +222,32 @@ void spc_bsdf_glint(SpeculaClosureQuery q, SpeculaShadingInputs s, sampler1DArra
     gq.gx = vec2(0.0);
     gq.gy = vec2(0.0);
     if (gq.ggaa) {
-        // Per-pixel dh from the frame rotation (T.dN, B.dN) (C21 §6.1: once per pixel, not per cell).
-        vec2 anx = vec2(dot(T, dndx), dot(B, dndx)), any = vec2(dot(T, dndy), dot(B, dndy));
-        // Plus the change of wo (s.dwodx) and, for a point light at q.light_distance, of wi = -(I - wi wi^T) dp / dist.
-        vec3 sx3 = spc_glint_frame_rotation(anx, o) + spc_to_local(s.dwodx, T, B, N) + spc_glint_frame_rotation(anx, i);
-        vec3 sy3 = spc_glint_frame_rotation(any, o) + spc_to_local(s.dwody, T, B, N) + spc_glint_frame_rotation(any, i);
-        if (!isinf(q.light_distance) && q.light_distance > 0.0) {
-            vec3 dpx = spc_to_local(s.dPdx, T, B, N), dpy = spc_to_local(s.dPdy, T, B, N);
-            sx3 -= (dpx - i * dot(i, dpx)) / q.light_distance;
-            sy3 -= (dpy - i * dot(i, dpy)) / q.light_distance;
-        }
-        vec3 dhx = (sx3 - h * dot(h, sx3)) / len, dhy = (sy3 - h * dot(h, sy3)) / len;
-        vec2 dx, dy;
-        if (derivative == SPC_GLINT_DERIVATIVE_PROJECTED_HALF) {  // projected half vector (C21 Eq. 21)
-            dx = dhx.xy;
-            dy = dhy.xy;
-        } else {  // half slope (C21 Eq. 20)
-            float iz2 = 1.0 / (h.z * h.z);
-            dx = vec2(-(dhx.x * h.z - h.x * dhx.z) * iz2, -(dhx.y * h.z - h.y * dhx.z) * iz2);
-            dy = vec2(-(dhy.x * h.z - h.x * dhy.z) * iz2, -(dhy.y * h.z - h.y * dhy.z) * iz2);
+        vec2 dx = dqx, dy = dqy;
+        if (!quadValid[0] || !quadValid[1]) {
+            // The analytic form, per axis without a quad difference (derivatives "analytic", or a partner that sees
+            // h below its horizon, as the CPU falls back): dh from the frame rotation (T.dN, B.dN) (C21 §6.1: once
+            // per pixel, not per cell), plus the change of wo (s.dwodx) and, for a point light at q.light_distance,
+            // of wi = -(I - wi wi^T) dp / dist.
+            vec2 anx = vec2(dot(T, dndx), dot(B, dndx)), any = vec2(dot(T, dndy), dot(B, dndy));
+            vec3 sx3 = spc_glint_frame_rotation(anx, o) + spc_to_local(s.dwodx, T, B, N) + spc_glint_frame_rotation(anx, i);
+            vec3 sy3 = spc_glint_frame_rotation(any, o) + spc_to_local(s.dwody, T, B, N) + spc_glint_frame_rotation(any, i);
+            if (!isinf(q.light_distance) && q.light_distance > 0.0) {
+                vec3 dpx = spc_to_local(s.dPdx, T, B, N), dpy = spc_to_local(s.dPdy, T, B, N);
+                sx3 -= (dpx - i * dot(i, dpx)) / q.light_distance;
+                sy3 -= (dpy - i * dot(i, dpy)) / q.light_distance;
+            }
+            vec3 dhx = (sx3 - h * dot(h, sx3)) / len, dhy = (sy3 - h * dot(h, sy3)) / len;
+            vec2 ax, ay;
+            if (derivative == SPC_GLINT_DERIVATIVE_PROJECTED_HALF) {  // projected half vector (C21 Eq. 21)
+                ax = dhx.xy;
+                ay = dhy.xy;
+            } else {  // half slope (C21 Eq. 20)
+                float iz2 = 1.0 / (h.z * h.z);
+                ax = vec2(-(dhx.x * h.z - h.x * dhx.z) * iz2, -(dhx.y * h.z - h.y * dhx.z) * iz2);
+                ay = vec2(-(dhy.x * h.z - h.x * dhy.z) * iz2, -(dhy.y * h.z - h.y * dhy.z) * iz2);
+            }
+            if (!quadValid[0]) dx = ax;
+            if (!quadValid[1]) dy = ay;
         }
         float kk = kernel_scale / SPC_GLINT_LIM;
         gq.gx = vec2(mi00 * dx.x + mi01 * dx.y, mi11 * dx.y) * kk;
