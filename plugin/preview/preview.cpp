@@ -247,7 +247,7 @@ layout(location = 0) out vec2 v_ndc;
 void main() {
     vec2 p = vec2((gl_VertexID << 1) & 2, gl_VertexID & 2) * 2.0 - 1.0;
     v_ndc = p;
-    gl_Position = vec4(p, 1.0, 1.0);
+    gl_Position = vec4(p, 0.0, 1.0);  // depth 0: infinitely far under the reversed-Z pass
 }
 )";
 const std::string kBackgroundFragment = std::string("#version 450 core\n") + R"(
@@ -367,13 +367,16 @@ GpuMesh uploadMesh(const TriangleMesh& m) {
 
 // The camera as a clip transform that puts frame pixel (x, y) (top-left origin) at GL window pixel (x, H-1-y): the
 // CPU's pixel-centre rays pass through the same points as the rasteriser's fragment centres.
-void viewProjection(const PerspectiveCamera& cam, float zNear, float zFar, float* out) {
+// Reversed-Z with an infinite far plane (used with glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE), a 32-bit float
+// depth buffer, GL_GREATER): depth = zNear / distance along the view axis, 1 at the near plane, 0 at infinity. The
+// float's relative precision then holds at every distance; the standard mapping with zNear = 1e-5 zFar resolved depth
+// to about 0.6 % of the distance near the far plane, so back faces showed through the far silhouettes of thin tubes.
+void viewProjection(const PerspectiveCamera& cam, float zNear, float* out) {
     const Vec3 f = cam.forward(), r = cam.right(), u = cam.up(), e = cam.position();
     const float sx = 1.f / cam.halfWidth(), sy = 1.f / cam.halfHeight();
-    const float A = (zFar + zNear) / (zFar - zNear), B = -2.f * zFar * zNear / (zFar - zNear);
-    // Rows of clip = M (p - e): x = sx r·d, y = sy u·d, z = A f·d + B, w = f·d.
-    const Vec3 rows[4] = {r * sx, u * sy, f * A, f};
-    const float add[4] = {0.f, 0.f, B, 0.f};
+    // Rows of clip = M (p - e): x = sx r·d, y = sy u·d, z = zNear, w = f·d.
+    const Vec3 rows[4] = {r * sx, u * sy, Vec3(0.f), f};
+    const float add[4] = {0.f, 0.f, zNear, 0.f};
     for (int i = 0; i < 4; ++i) {
         // column-major: out[col * 4 + row]
         out[0 * 4 + i] = rows[i].x;
@@ -697,11 +700,11 @@ double PreviewRenderer::draw(const CameraDesc& cameraDesc, int W, int H) {
     const Scene& scene = st.scene;
     st.makeTarget(W, H);
     PerspectiveCamera camera(cameraDesc, W, H);
-    // Near and far planes from the scene's extent (seen from the scene camera; a moved camera adds its offset).
+    // The near plane from the scene's extent (seen from the scene camera; a moved camera adds its offset).
     const float zFar = (st.sceneFar + glm::length(camera.position() - PerspectiveCamera(scene.camera, W, H).position())) * 1.01f;
     const float zNear = std::max(zFar * 1e-5f, 1e-5f);
     FrameBlock& frame = st.frame;
-    viewProjection(camera, zNear, zFar, frame.viewProj);
+    viewProjection(camera, zNear, frame.viewProj);
     frame.eye[0] = camera.position().x, frame.eye[1] = camera.position().y, frame.eye[2] = camera.position().z;
     frame.forward[0] = camera.forward().x, frame.forward[1] = camera.forward().y, frame.forward[2] = camera.forward().z;
     glBindBuffer(GL_UNIFORM_BUFFER, st.frameBuffer);
@@ -711,9 +714,10 @@ double PreviewRenderer::draw(const CameraDesc& cameraDesc, int W, int H) {
     glBeginQuery(GL_TIME_ELAPSED, st.query);
     glViewport(0, 0, W, H);
     glEnable(GL_DEPTH_TEST);
-    glDepthFunc(GL_LESS);
+    glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);  // reversed-Z (viewProjection); restored after the pass
+    glDepthFunc(GL_GREATER);
     glDisable(GL_CULL_FACE);
-    glClearDepth(1.0);
+    glClearDepth(0.0);
     glClear(GL_DEPTH_BUFFER_BIT);
     glBindBufferBase(GL_UNIFORM_BUFFER, GLuint(st.frameBinding), st.frameBuffer);
     glActiveTexture(GLenum(GL_TEXTURE0 + st.shadowBinding));
@@ -738,8 +742,8 @@ double PreviewRenderer::draw(const CameraDesc& cameraDesc, int W, int H) {
         glBindVertexArray(st.meshes[i].vao);
         glDrawElements(GL_TRIANGLES, st.meshes[i].indexCount, GL_UNSIGNED_INT, nullptr);
     }
-    // Background where no surface is: depth 1 passes GL_LEQUAL only where the depth buffer is still clear.
-    glDepthFunc(GL_LEQUAL);
+    // Background where no surface is: depth 0 (infinity) passes GL_GEQUAL only where the depth buffer is still clear.
+    glDepthFunc(GL_GEQUAL);
     glUseProgram(st.backgroundProgram);
     const Vec3 fw = camera.forward(), rt = camera.right() * camera.halfWidth(), up = camera.up() * camera.halfHeight();
     const RasterLight* map = st.map;
@@ -755,6 +759,7 @@ double PreviewRenderer::draw(const CameraDesc& cameraDesc, int W, int H) {
     glBindVertexArray(st.meshes.empty() ? 0 : st.meshes[0].vao);
     glDrawArrays(GL_TRIANGLES, 0, 3);
     glEndQuery(GL_TIME_ELAPSED);
+    glClipControl(GL_LOWER_LEFT, GL_NEGATIVE_ONE_TO_ONE);  // GL's default again for the shadow passes and hosts
     GLuint64 ns = 0;
     glGetQueryObjectui64v(st.query, GL_QUERY_RESULT, &ns);
     return double(ns);
