@@ -61,7 +61,20 @@ Accel::~Accel() {
     if (impl_->device) rtcReleaseDevice(impl_->device);
 }
 
+namespace {
+RayObserver* gRayObserver = nullptr;
+}  // namespace
+
+void Accel::setRayObserver(RayObserver* observer) { gRayObserver = observer; }
+
 bool Accel::intersect(const Ray& ray, Hit& hit) const {
+    if (gRayObserver) gRayObserver->onRay(ray, false);
+    if (!embreeIntersect(ray, hit)) return false;
+    refineHit(ray, hit);
+    return true;
+}
+
+bool Accel::embreeIntersect(const Ray& ray, Hit& hit) const {
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     RTCRayHit rh;
@@ -86,7 +99,6 @@ bool Accel::intersect(const Ray& ray, Hit& hit) const {
     hit.prim = rh.hit.primID;
     hit.b1 = rh.hit.u;
     hit.b2 = rh.hit.v;
-    refineHit(ray, hit);
     return true;
 }
 
@@ -120,6 +132,11 @@ void Accel::refineHit(const Ray& ray, Hit& hit) const {
 }
 
 bool Accel::occluded(const Ray& ray) const {
+    if (gRayObserver) gRayObserver->onRay(ray, true);
+    return embreeOccluded(ray);
+}
+
+bool Accel::embreeOccluded(const Ray& ray) const {
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     RTCRay r;

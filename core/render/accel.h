@@ -18,6 +18,14 @@ struct Hit {
     float b1 = 0.f, b2 = 0.f;  // barycentrics of vertices 1 and 2
 };
 
+// Sees every ray the renderer traces through an Accel (bench_embree_limit records them to replay through Embree
+// alone). Called from the render threads concurrently; null (the default) costs one load and branch per ray.
+class RayObserver {
+public:
+    virtual ~RayObserver() = default;
+    virtual void onRay(const Ray& ray, bool shadow) = 0;
+};
+
 class Accel {
 public:
     // embreeConfig: Embree's device configuration string (tests pin its ISA with "max_isa=sse4.2" and the like).
@@ -28,6 +36,12 @@ public:
 
     bool intersect(const Ray& ray, Hit& hit) const;
     bool occluded(const Ray& ray) const;
+    // Embree's answer alone: rtcIntersect1 / rtcOccluded1 on this BVH, without the exact recomputation of the hit
+    // (refineHit) and unobserved. For bench_embree_limit, the renderer's lower bound (issue 15 item 2).
+    bool embreeIntersect(const Ray& ray, Hit& hit) const;
+    bool embreeOccluded(const Ray& ray) const;
+    // Process-wide; set it before a render and clear it after (not while one runs).
+    static void setRayObserver(RayObserver* observer);
 
     // Builds the shading point of a hit; if the ray carries differentials, computes dp/dx, dp/dy,
     // duv, dn and dwo (pbrt-v4 SurfaceInteraction::ComputeDifferentials). The geometric and shading

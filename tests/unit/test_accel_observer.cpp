@@ -1,0 +1,67 @@
+// Accel's RayObserver and its Embree-only queries (bench_embree_limit, issue 15 item 2): the observer sees every ray of
+// a render (camera, bounces and shadow rays) without changing a bit of the image, and Embree alone finds the same
+// triangle as Accel::intersect, whose exact recomputation moves t by rounding only.
+#include "core/api/specula.h"
+#include "core/render/accel.h"
+#include "tests/unit/test_support.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <mutex>
+#include <vector>
+
+using namespace specula;
+
+namespace {
+
+class Collect final : public RayObserver {
+public:
+    void onRay(const Ray& ray, bool shadow) override {
+        std::lock_guard<std::mutex> lock(m);
+        (shadow ? shadows : rays).push_back(ray);
+    }
+    std::mutex m;
+    std::vector<Ray> rays, shadows;
+};
+
+}  // namespace
+
+TEST(AccelObserver, SeesEveryRayAndChangesNoPixel) {
+    SceneOverrides ov;
+    ov.spp = 2;
+    ov.width = ov.height = 32;
+    const Scene scene = loadScene(test::sourcePath("examples/anchor-sphere.json"), ov);
+    const RenderOutput plain = renderScene(scene);
+    Collect c;
+    Accel::setRayObserver(&c);
+    const RenderOutput observed = renderScene(scene);
+    Accel::setRayObserver(nullptr);
+    ASSERT_EQ(plain.images.aovs.size(), observed.images.aovs.size());
+    for (size_t a = 0; a < plain.images.aovs.size(); ++a) {
+        const auto& p = plain.images.aovs[a].pixels;
+        const auto& o = observed.images.aovs[a].pixels;
+        ASSERT_EQ(p.size(), o.size());
+        EXPECT_EQ(0, std::memcmp(p.data(), o.data(), p.size() * sizeof(p[0]))) << "AOV " << a;
+    }
+    // At least one camera ray per sample, and the path integrator's shadow rays.
+    EXPECT_GE(c.rays.size(), size_t(32 * 32 * 2));
+    EXPECT_GT(c.shadows.size(), size_t(0));
+
+    Accel accel(scene);
+    int hits = 0;
+    for (size_t i = 0; i < c.rays.size(); i += 7) {
+        Hit exact, raw;
+        const bool a = accel.intersect(c.rays[i], exact), b = accel.embreeIntersect(c.rays[i], raw);
+        ASSERT_EQ(a, b) << "ray " << i;
+        if (!a) continue;
+        ++hits;
+        EXPECT_EQ(exact.shape, raw.shape);
+        EXPECT_EQ(exact.prim, raw.prim);
+        EXPECT_NEAR(exact.t, raw.t, 1e-4f * std::max(1.f, raw.t)) << "ray " << i;
+    }
+    EXPECT_GT(hits, 100);
+    for (size_t i = 0; i < c.shadows.size(); i += 7)
+        EXPECT_EQ(accel.occluded(c.shadows[i]), accel.embreeOccluded(c.shadows[i])) << "shadow ray " << i;
+}
