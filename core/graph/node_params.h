@@ -161,9 +161,16 @@ public:
         for (const Field& fd : fields_) {
             switch (fd.kind) {
                 case Field::Floats: {
+                    // Fixed-size copies (the widths are 1, 2 or 3): a per-float loop was a third of a GGX node's time
+                    // in bench_graph.
                     const float* src = c.r + i.in[fd.port];
-                    float* dst = reinterpret_cast<float*>(base + fd.offset);
-                    for (int k = 0; k < fd.width; ++k) dst[k] = src[k];
+                    char* dst = base + fd.offset;
+                    switch (fd.width) {
+                        case 1: std::memcpy(dst, src, 4); break;
+                        case 2: std::memcpy(dst, src, 8); break;
+                        case 3: std::memcpy(dst, src, 12); break;
+                        default: std::memcpy(dst, src, 4 * size_t(fd.width)); break;
+                    }
                     break;
                 }
                 case Field::Enum: {
