@@ -3,6 +3,7 @@
 #include "core/io/image_io.h"
 
 #include "core/color/color_config.h"
+#include "core/util/error.h"
 
 #include <OpenImageIO/imagebuf.h>
 #include <OpenImageIO/imagebufalgo.h>
@@ -526,6 +527,17 @@ CompareResult compareImages(const std::string& pathA, const std::string& pathB, 
     }
 
     const int w = A.width, h = A.height, c = a->channels();
+    // NaN or Inf make every metric undefined (OpenImageIO's RMSE became nan, printed as "PSNR inf" and the invalid JSON
+    // token nan): refuse, naming the file, the count and the first pixel.
+    for (auto [buf, path] : {std::pair{a, &pathA}, std::pair{b, &pathB}}) {
+        size_t bad = 0, first = 0;
+        for (size_t i = 0; i < buf->pixels.size(); ++i)
+            if (!std::isfinite(buf->pixels[i]) && bad++ == 0) first = i / size_t(c);
+        if (bad)
+            throw Error(ErrorCode::BadInput, "", "compare: '" + *path + "' has " + std::to_string(bad) + " NaN or infinite values in AOV '" +
+                                     aov + "' (the first at pixel " + std::to_string(first % size_t(w)) + "," +
+                                     std::to_string(first / size_t(w)) + "): RMSE, MAE and PSNR are undefined");
+    }
     OIIO::ImageSpec spec(w, h, c, OIIO::TypeDesc::FLOAT);
     OIIO::ImageBuf bufA(spec, const_cast<float*>(a->pixels.data()));
     OIIO::ImageBuf bufB(spec, const_cast<float*>(b->pixels.data()));

@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <set>
 #include <sstream>
 
 namespace fs = std::filesystem;
@@ -338,9 +339,79 @@ void readLight(const Json& j, const std::string& ptr, Context& ctx) {
     s.lights.push_back(std::move(light));
 }
 
+// Nesting deeper than this is refused while parsing: nothing in a scene needs it, and nlohmann's serializer (messages
+// dump values) and the loader's readers recurse once per level, so a small file of 100k nested arrays overflowed the
+// stack (issue 16).
+constexpr int kMaxJsonDepth = 64;
+
+// The JSON pointer of the value being parsed, and the keys seen per object, for the parser callback below.
+class JsonStructureCheck {
+public:
+    explicit JsonStructureCheck(const std::string& name) : name_(name) {}
+    bool operator()(int depth, Json::parse_event_t event, Json& parsed) {
+        using E = Json::parse_event_t;
+        if (depth > kMaxJsonDepth)
+            throw InputError(pointer(), name_ + ": JSON nested deeper than " + std::to_string(kMaxJsonDepth) + " levels");
+        switch (event) {
+            case E::object_start:
+            case E::array_start:
+                enterChild();
+                frames_.push_back({event == E::array_start, -1, {}, {}});
+                break;
+            case E::key: {
+                Frame& f = frames_.back();
+                const std::string key = parsed.get<std::string>();
+                if (!f.keys.insert(key).second) {
+                    f.key.clear();
+                    throw InputError(pointer() + "/" + escape(key), name_ + ": duplicate key '" + key +
+                                                                        "' (JSON allows it, but only one value would be used)");
+                }
+                f.key = key;
+                break;
+            }
+            case E::value:
+                enterChild();
+                break;
+            case E::object_end:
+            case E::array_end:
+                frames_.pop_back();
+                break;
+        }
+        return true;
+    }
+
+private:
+    struct Frame {
+        bool array;
+        int index;
+        std::set<std::string> keys;
+        std::string key;
+    };
+    void enterChild() {
+        if (!frames_.empty() && frames_.back().array) ++frames_.back().index;
+    }
+    static std::string escape(const std::string& k) {
+        std::string r;
+        for (char c : k) r += c == '~' ? std::string("~0") : c == '/' ? std::string("~1") : std::string(1, c);
+        return r;
+    }
+    // The pointer of the innermost open container (its current key or index not included).
+    std::string pointer() const {
+        std::string p;
+        for (size_t i = 0; i + 1 < frames_.size(); ++i)
+            p += "/" + (frames_[i].array ? std::to_string(frames_[i].index) : escape(frames_[i].key));
+        return p;
+    }
+    std::string name_;
+    std::vector<Frame> frames_;
+};
+
 Json parseJson(const std::string& text, const std::string& name) {
     try {
-        return Json::parse(text);
+        JsonStructureCheck check(name);
+        return Json::parse(text, [&check](int depth, Json::parse_event_t event, Json& parsed) {
+            return check(depth, event, parsed);
+        });
     } catch (const Json::exception& e) {
         // Convert the byte offset (parse errors) into line:column for the message.
         size_t byte = 0;

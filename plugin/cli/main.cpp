@@ -122,7 +122,8 @@ int main(int argc, char** argv) {
             CropWindow c;
             char s1, s2, s3;
             std::istringstream in(crop);
-            if (!(in >> c.x0 >> s1 >> c.y0 >> s2 >> c.x1 >> s3 >> c.y1) || s1 != ',' || s2 != ',' || s3 != ',') {
+            const bool parsed = bool(in >> c.x0 >> s1 >> c.y0 >> s2 >> c.x1 >> s3 >> c.y1);
+            if (!parsed || s1 != ',' || s2 != ',' || s3 != ',' || !(in >> std::ws).eof()) {  // nothing may follow y1
                 std::fprintf(stderr, "specula: error: --crop expects x0,y0,x1,y1, got '%s'\n", crop.c_str());
                 exitCode = kExitUsage;
                 return;
@@ -207,6 +208,8 @@ int main(int argc, char** argv) {
             else
                 std::printf("aov   %s (%dx%d, %d channels)\nRMSE  %.6g\nMAE   %.6g\nPSNR  %.3f dB\n", aov.c_str(), r.width,
                             r.height, r.channels, r.rmse, r.mae, r.psnr);
+        } catch (const Error& e) {
+            exitCode = reportError(e, e.exitCode());  // NaN/Inf in an image: bad input (1)
         } catch (const std::exception& e) {
             exitCode = reportError(e, kExitIo);
         }

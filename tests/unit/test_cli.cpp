@@ -1,5 +1,6 @@
 // The `specula` CLI end to end: exit codes, outputs, JSON progress, compare/info, and that a failing
 // or interrupted render never touches an existing output file.
+#include "core/color/color_config.h"
 #include "core/io/image_io.h"
 #include "test_support.h"
 
@@ -8,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include <chrono>
+#include <limits>
 #include <csignal>
 #include <filesystem>
 #include <sys/wait.h>
@@ -347,4 +349,39 @@ TEST(Cli, PlotFootprintShowsGlintSparkles) {
     EXPECT_DOUBLE_EQ(sparkles, explicitDuv);
     // A non-positive footprint is a usage error.
     EXPECT_NE(test::runCli("plot " + q(dir + "/g.json") + " --material glint --wo 0,0,1 -o " + q(dir + "/x.png") + " --footprint -1"), 0);
+}
+
+// Issue 16's hostile inputs, each with its exit code, a message naming the pointer or file, and no output written.
+TEST(Cli, HostileInputsGetOneClearErrorAndWriteNothing) {
+    std::string dir = test::tempDir("cli");
+    test::writeFile(dir + "/s.json", kSmallScene);
+    std::string out;
+    // --crop with trailing junk: usage error.
+    EXPECT_EQ(test::runCli("render " + q(dir + "/s.json") + " --crop 0,0,4,4,99 -o " + q(dir + "/c.exr"), &out), 2) << out;
+    EXPECT_NE(out.find("--crop expects x0,y0,x1,y1"), std::string::npos) << out;
+    EXPECT_FALSE(fs::exists(dir + "/c.exr"));
+    // A duplicate key: last-one-wins would silently drop a value.
+    std::string dup = kSmallScene;
+    dup.replace(dup.find("\"spp\": 2"), 8, "\"spp\": 2, \"spp\": 64");
+    test::writeFile(dir + "/dup.json", dup);
+    EXPECT_EQ(test::runCli("render " + q(dir + "/dup.json") + " -o " + q(dir + "/d.exr"), &out), 1) << out;
+    EXPECT_NE(out.find("/render/spp"), std::string::npos) << out;
+    EXPECT_NE(out.find("duplicate key 'spp'"), std::string::npos) << out;
+    EXPECT_FALSE(fs::exists(dir + "/d.exr"));
+    // 100k nested arrays as a shape type (200 KB): refused while parsing, before any recursion can overflow.
+    std::string deep = kSmallScene;
+    deep.replace(deep.find("\"sphere\""), 8, std::string(100000, '[') + "\"sphere\"" + std::string(100000, ']'));
+    test::writeFile(dir + "/deep.json", deep);
+    EXPECT_EQ(test::runCli("info " + q(dir + "/deep.json"), &out), 1) << out;
+    EXPECT_NE(out.find("nested deeper than 64 levels"), std::string::npos) << out;
+    EXPECT_NE(out.find("deep.json"), std::string::npos) << out;
+    // compare of an image holding NaN: undefined metrics are an error, never "PSNR inf" or the JSON token nan.
+    ASSERT_EQ(test::runCli("render " + q(dir + "/s.json") + " -o " + q(dir + "/a.exr") + " --progress none"), 0);
+    ImageSet img = readImageSet(dir + "/a.exr");
+    img.aovs[0].pixels[7] = std::numeric_limits<float>::quiet_NaN();
+    writeExr(dir + "/nan.exr", img, *ColorConfig::load());
+    EXPECT_EQ(test::runCli("compare " + q(dir + "/nan.exr") + " " + q(dir + "/a.exr") + " --json", &out), 1) << out;
+    EXPECT_NE(out.find("1 NaN or infinite values"), std::string::npos) << out;
+    EXPECT_NE(out.find("nan.exr"), std::string::npos) << out;
+    EXPECT_EQ(out.find("\"rmse\""), std::string::npos) << out;
 }
