@@ -11,6 +11,15 @@ PerspectiveCamera::PerspectiveCamera(const CameraDesc& desc, int width, int heig
     forward_ = glm::normalize(desc.lookAt - desc.position);
     right_ = glm::normalize(glm::cross(forward_, desc.up));
     upv_ = glm::cross(right_, forward_);
+    if (!isFinite(forward_) || !isFinite(right_) || !isFinite(upv_)) {
+        // Positions up to ±1e30 (the scene's range) overflow a float's squared length: the basis in double then
+        // (only then, so every other camera keeps its bits).
+        const glm::dvec3 f = glm::normalize(glm::dvec3(desc.lookAt) - glm::dvec3(desc.position));
+        const glm::dvec3 r = glm::normalize(glm::cross(f, glm::dvec3(desc.up)));
+        forward_ = Vec3(f);
+        right_ = Vec3(r);
+        upv_ = Vec3(glm::cross(r, f));
+    }
     float t = std::tan(0.5f * glm::radians(desc.fovDegrees));
     float aspect = float(width) / float(height);
     if (desc.fovIsHorizontal) {

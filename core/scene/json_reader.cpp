@@ -50,8 +50,11 @@ float JsonReader::toNumber(const Json& v, const std::string& ptr, float lo, floa
     if (!v.is_number()) throw InputError(ptr, "expected a number, got " + jsonTypeName(v));
     double d = v.get<double>();
     if (!std::isfinite(d)) throw InputError(ptr, "number is not finite");
-    if (d < lo || d > hi) throw InputError(ptr, "value " + fmt(float(d)) + " is outside [" + fmt(lo) + ", " + fmt(hi) + "]");
-    return float(d);
+    // Compared as the float the scene stores: a documented bound such as 1e12 is itself a rounded float (999999995904),
+    // so the double 1e12 would fall just outside it.
+    const float f = float(d);
+    if (f < lo || f > hi) throw InputError(ptr, "value " + fmt(f) + " is outside [" + fmt(lo) + ", " + fmt(hi) + "]");
+    return f;
 }
 
 float JsonReader::number(const std::string& key, float def, float lo, float hi) const {

@@ -106,9 +106,13 @@ void readCamera(const Json& j, Scene& s) {
     c.fovIsHorizontal = r.enumeration("fov_axis", "x", {"x", "y"}) == "x";
     c.apertureRadius = r.number("aperture_radius", 0.f, 0.f, kBig);
     c.focusDistance = r.number("focus_distance", 0.f, 0.f, kBig);
-    Vec3 fwd = c.lookAt - c.position;
-    if (glm::length(fwd) < 1e-9f) r.fail("look_at", "look_at equals position");
-    if (glm::length(glm::cross(glm::normalize(fwd), c.up)) < 1e-6f) r.fail("up", "up is parallel to the view direction");
+    // In double: positions reach ±1e30, whose squared float length overflows (a camera at 1e30 was reported as "up is
+    // parallel to the view direction").
+    const glm::dvec3 fwd = glm::dvec3(c.lookAt) - glm::dvec3(c.position);
+    if (glm::length(fwd) < 1e-9) r.fail("look_at", "look_at equals position");
+    if (glm::length(glm::dvec3(c.up)) < 1e-9) r.fail("up", "up must be a non-zero vector");
+    if (glm::length(glm::cross(glm::normalize(fwd), glm::normalize(glm::dvec3(c.up)))) < 1e-6)
+        r.fail("up", "up is parallel to the view direction");
 }
 
 Mat4 readTransform(const JsonReader& parent) {
@@ -498,14 +502,24 @@ Scene loadSceneFromString(const std::string& text, const std::string& baseDir, c
     return scene;
 }
 
+// A scene is JSON text; anything larger is a wrong file (a mesh, /dev/zero), read no further than this.
+constexpr size_t kMaxSceneBytes = size_t(256) << 20;
+
 Scene loadScene(const std::string& path, const SceneOverrides& overrides) {
+    std::error_code ec;
+    if (fs::is_directory(path, ec)) throw IoError("scene path '" + path + "' is a folder, not a scene file");
     std::ifstream f(path, std::ios::binary);
     if (!f) throw IoError("cannot open scene file '" + path + "'");
-    std::stringstream ss;
-    ss << f.rdbuf();
+    std::string text;
+    char buf[1 << 16];
+    while (f.read(buf, sizeof buf) || f.gcount() > 0) {
+        text.append(buf, size_t(f.gcount()));
+        if (text.size() > kMaxSceneBytes)
+            throw InputError("", "scene file '" + path + "' is larger than 256 MiB: not a scene (a scene is JSON text)");
+    }
     std::string base = fs::path(path).parent_path().string();
     if (base.empty()) base = ".";
-    return loadSceneFromString(ss.str(), base, overrides, path);
+    return loadSceneFromString(text, base, overrides, path);
 }
 
 std::string describeScene(const Scene& s) {

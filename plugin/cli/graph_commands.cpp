@@ -79,14 +79,22 @@ Vec3 parseVec3(const std::string& s, const char* what) {
     Vec3 v;
     char c1, c2;
     std::istringstream in(s);
-    if (!(in >> v.x >> c1 >> v.y >> c2 >> v.z) || c1 != ',' || c2 != ',') throw UsageError(std::string(what) + " expects X,Y,Z");
+    if (!(in >> v.x >> c1 >> v.y >> c2 >> v.z) || c1 != ',' || c2 != ',' || !(in >> std::ws).eof() || !isFinite(v))
+        throw UsageError(std::string(what) + " expects X,Y,Z (three finite numbers)");
     return v;
+}
+// A direction: parseVec3, non-zero, normalised.
+Vec3 parseDirection(const std::string& s, const char* what) {
+    const Vec3 v = parseVec3(s, what);
+    if (!(glm::dot(v, v) > 0.f)) throw UsageError(std::string(what) + " must be a non-zero direction, got " + s);
+    return glm::normalize(v);
 }
 Vec2 parseVec2(const std::string& s, const char* what) {
     Vec2 v;
     char c;
     std::istringstream in(s);
-    if (!(in >> v.x >> c >> v.y) || c != ',') throw UsageError(std::string(what) + " expects A,B");
+    if (!(in >> v.x >> c >> v.y) || c != ',' || !(in >> std::ws).eof() || !std::isfinite(v.x) || !std::isfinite(v.y))
+        throw UsageError(std::string(what) + " expects A,B (two finite numbers)");
     return v;
 }
 
@@ -240,7 +248,7 @@ json vecJson(const Vec3& v) { return json::array({v.x, v.y, v.z}); }
 // (visible-normal sampling pdf of Closure::sample, not renormalised over the hemisphere), and every lobe with its
 // weight, frame, own f·cos and pdf and its model parameters for this query (e.g. a filtered roughness matrix).
 json evaluateBsdf(MaterialCache& cache, const BsdfRequestArgs& r) {
-    Vec3 wo = glm::normalize(parseVec3(r.wo, "wo")), wi = glm::normalize(parseVec3(r.wi, "wi"));
+    Vec3 wo = parseDirection(r.wo, "wo"), wi = parseDirection(r.wi, "wi");
     const MaterialInstance& mi = cache.get(r.material);
     ShadingPoint sp = localPoint(parseVec2(r.uv, "uv"), parseVec2(r.duvdx, "duvdx"), parseVec2(r.duvdy, "duvdy"), wo);
     sp.dpdx = parseVec3(r.dpdx, "dpdx"), sp.dpdy = parseVec3(r.dpdy, "dpdy");
@@ -398,7 +406,7 @@ void addGraphCommands(CLI::App& app, int& exitCode) {
     plot->add_option("--raw", p->raw, "also write the float values as an EXR (beauty: f·cos RGB of the lobe panel; 'ndf' layer)");
     plot->callback([=, &exitCode] {
         exitCode = run([&] {
-            Vec3 wo = glm::normalize(parseVec3(p->wo, "--wo"));
+            Vec3 wo = parseDirection(p->wo, "--wo");
             if (p->size < 16 || p->size > 4096) throw UsageError("--size must be in [16, 4096]");
             Loaded l = readMaterial(p->file, p->material);
             MaterialInstance mi = instantiate(l);

@@ -384,4 +384,21 @@ TEST(Cli, HostileInputsGetOneClearErrorAndWriteNothing) {
     EXPECT_NE(out.find("1 NaN or infinite values"), std::string::npos) << out;
     EXPECT_NE(out.find("nan.exr"), std::string::npos) << out;
     EXPECT_EQ(out.find("\"rmse\""), std::string::npos) << out;
+    // A zero direction for bsdf: usage error, no value printed.
+    test::writeFile(dir + "/m.json", R"({"materials": {"m": {"nodes": {"d": {"type": "bsdf.diffuse"}}, "output": "@d.bsdf"}}})");
+    EXPECT_EQ(test::runCli("bsdf " + q(dir + "/m.json") + " --wo 0,0,0 --wi 0,0,1", &out), 2) << out;
+    EXPECT_NE(out.find("non-zero direction"), std::string::npos) << out;
+    EXPECT_EQ(out.find("\"f\""), std::string::npos) << out;
+    // The documented maximum power 1e12 is accepted; a camera at the documented position limit 1e30 is valid.
+    std::string big = kSmallScene;
+    big.replace(big.find("\"power\": 300"), 12, "\"power\": 1e12");
+    big.replace(big.find("[0, -4, 1]"), 10, "[0, -1e30, 1]");
+    test::writeFile(dir + "/big.json", big);
+    EXPECT_EQ(test::runCli("info " + q(dir + "/big.json"), &out), 0) << out;
+    // A folder as the scene: I/O error (3), not malformed JSON; /dev/zero: refused after 256 MiB, not read forever.
+    fs::create_directories(dir + "/folder.json");
+    EXPECT_EQ(test::runCli("info " + q(dir + "/folder.json"), &out), 3) << out;
+    EXPECT_NE(out.find("is a folder"), std::string::npos) << out;
+    EXPECT_EQ(test::runCli("info /dev/zero", &out), 1) << out;
+    EXPECT_NE(out.find("larger than 256 MiB"), std::string::npos) << out;
 }
