@@ -330,6 +330,11 @@ Program Program::compile(const GraphDesc& g, const std::vector<std::pair<int, in
     std::vector<char> constNode(g.nodes.size(), 0);
     std::map<GeomBinding, uint16_t> bindingRegs;
     auto alloc = [&](int w) {
+        // Instr holds 16-bit register indices: a graph that needs more registers is refused here rather than shaded
+        // with wrapped indices (a 14-level tree of closure.add printed f = 0 where 0.159 is right; issue 16).
+        if (prog.tmpl_.size() + size_t(w) > kMaxRegisters)
+            throw InputError(g.pointer, "the graph needs more than " + std::to_string(kMaxRegisters) + " registers (" +
+                                            std::to_string(live.size()) + " live nodes); split it into smaller materials");
         uint16_t r = uint16_t(prog.tmpl_.size());
         for (int i = 0; i < w; ++i) prog.tmpl_.push_back(0.f);
         return r;

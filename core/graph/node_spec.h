@@ -223,7 +223,8 @@ struct NodeSpec {
 };
 
 // ---- flat instruction list ---------------------------------------------------------------------
-constexpr int kMaxInputs = 32;  // bsdf.glint has 25 inputs (20 + the fresnelPorts() group and base_color)
+constexpr size_t kMaxRegisters = 65535;  // Instr's register indices are uint16_t (Program::compile refuses more)
+constexpr int kMaxInputs = 32;  // bsdf.glint has 29 inputs (22 + the fresnelPorts() group, base_color and derivatives)
 constexpr int kMaxOutputs = 6;  // geometry.uv has 5 (uv, sample and pixel footprints); usedOutputs holds 8 bits
 constexpr uint16_t kNoRegister = 0xFFFF;
 

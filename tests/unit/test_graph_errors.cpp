@@ -139,3 +139,30 @@ TEST(GraphErrors, LiteralOutsideSoftRangeWarns) {
     EXPECT_EQ(warnings[0].rfind("/materials/steel/nodes/spec/inputs/weight: ", 0), 0u) << warnings[0];
     EXPECT_NE(warnings[0].find("usual range [0, 1]"), std::string::npos) << warnings[0];
 }
+
+// Register indices are 16-bit: a graph needing more than 65535 registers is refused with the material's pointer
+// (issue 16: a 14-level binary tree of closure.add shaded f = 0 where 0.159 is right). A 13-level tree still loads.
+TEST(GraphErrors, GraphsBeyondTheRegisterFileAreRefused) {
+    auto tree = [](int levels) {
+        json nodes = json::object();
+        const int leaves = 1 << levels;
+        for (int i = 0; i < leaves; ++i) nodes["l" + std::to_string(i)] = {{"type", "bsdf.diffuse"}};
+        std::vector<std::string> layer;
+        for (int i = 0; i < leaves; ++i) layer.push_back("@l" + std::to_string(i) + ".bsdf");
+        int n = 0;
+        while (layer.size() > 1) {
+            std::vector<std::string> next;
+            for (size_t i = 0; i < layer.size(); i += 2) {
+                const std::string id = "a" + std::to_string(n++);
+                nodes[id] = {{"type", "closure.add"}, {"inputs", {{"a", layer[i]}, {"b", layer[i + 1]}}}};
+                next.push_back("@" + id + ".bsdf");
+            }
+            layer = next;
+        }
+        return json{{"nodes", nodes}, {"output", layer[0]}};
+    };
+    EXPECT_NO_THROW(loadGraphMaterial(tree(10), "/materials/steel", GraphLoadContext{}));
+    InputError e = loadError(tree(14));
+    EXPECT_EQ(e.pointer(), "/materials/steel");
+    EXPECT_NE(std::string(e.what()).find("more than 65535 registers"), std::string::npos) << e.what();
+}
