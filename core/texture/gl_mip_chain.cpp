@@ -92,9 +92,7 @@ Vec4 GlMipChain::anisotropic(Vec2 uv, Vec2 duvdx, Vec2 duvdy, TextureWrap wrap) 
     const float l1 = std::sqrt(glm::dot(j1, j1)), l2 = std::sqrt(glm::dot(j2, j2));
     const float pmax = std::max(l1, l2), pmin = std::min(l1, l2);
     if (!(pmax > 0.f)) return bilinear(0, uv, wrap);
-    const int na = pmin > 0.f ? int(std::min(std::ceil(pmax / pmin - kGlAnisoRatioSlack), float(kGlMaxAnisotropy)))
-                              : kGlMaxAnisotropy;
-    const int n = std::max(1, na);
+    const int n = anisotropicProbeCount(pmax, pmin, kGlMaxAnisotropy);
     const Vec2 major = l1 >= l2 ? duvdx : duvdy;
     const float lambda = std::log2(pmax / float(n));
     Vec4 sum(0.f);

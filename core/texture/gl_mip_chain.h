@@ -5,15 +5,23 @@
 #include "core/math/math.h"
 #include "core/texture/texture_store.h"
 
+#include <algorithm>
+#include <cmath>
 #include <vector>
 
 namespace specula {
 
-// Footprints within this fraction of isotropic take one anisotropic probe (the same slack as LEAN's lookup,
-// kAnisoRatioSlack): derivative sources that differ by rounding must not flip a camera-facing surface between one
-// probe at λ and two at λ − 1.
+// Footprints within this fraction of isotropic take one anisotropic probe: derivative sources that differ by rounding
+// (the CPU's quad partners, a GPU's dFdx) must not flip a camera-facing surface between one probe at λ and two at λ − 1.
 inline constexpr float kGlAnisoRatioSlack = 1e-3f;
 inline constexpr int kGlMaxAnisotropy = 16;
+
+// EXT_texture_filter_anisotropic's probe count N = min(ceil(Pmax/Pmin - slack), maxAniso), at least 1 (Pmin = 0:
+// maxAniso). Shared by GlMipChain::anisotropic and LeanPyramid::lookup; image.glsl and lean.glsl repeat it.
+inline int anisotropicProbeCount(float pmax, float pmin, int maxAniso) {
+    const int n = pmin > 0.f ? int(std::min(std::ceil(pmax / pmin - kGlAnisoRatioSlack), float(maxAniso))) : maxAniso;
+    return std::max(1, n);
+}
 
 class GlMipChain {
 public:

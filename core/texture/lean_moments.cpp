@@ -2,6 +2,8 @@
 // GL-equivalent bilinear/trilinear/anisotropic lookups (the GLSL of texture.lean performs the same steps).
 #include "core/texture/lean_moments.h"
 
+#include "core/texture/gl_mip_chain.h"
+
 #include "core/texture/normal_map_gen.h"
 
 #include <algorithm>
@@ -187,11 +189,7 @@ LeanMoments LeanPyramid::lookup(Vec2 uv, Vec2 duvdx, Vec2 duvdy, LeanFilter filt
     // Anisotropic (EXT_texture_filter_anisotropic reference): probes along the longer axis.
     const float pmax = std::max(l1, l2), pmin = std::min(l1, l2);
     if (!(pmax > 0.f)) return bilinear(0, uv, wrap);
-    // N = ceil(Pmax/Pmin) less kAnisoRatioSlack: footprints within 0.1 % of isotropic (a surface facing the camera)
-    // take one probe. Without the slack such footprints sit on the 1 -> 2 step, where a rounding difference between
-    // two derivative sources (the CPU's quad partners, a GPU's dFdx) halves the blur of a pixel (docs/preview.md).
-    const int na = pmin > 0.f ? int(std::min(std::ceil(pmax / pmin - kAnisoRatioSlack), float(maxAniso))) : maxAniso;
-    const int n = std::max(1, na);
+    const int n = anisotropicProbeCount(pmax, pmin, maxAniso);  // near-isotropic footprints: one probe
     const Vec2 major = l1 >= l2 ? duvdx : duvdy;
     const float lambda = std::log2(pmax / float(n));
     LeanMoments m;

@@ -54,9 +54,6 @@ LeanStats leanStats(const LeanMoments& m, float strength = 1.f, bool flipY = fal
 constexpr float kLeanMaxSlope = 16.f;
 LeanMoments leanTexelMoments(Vec3 n);
 
-// The anisotropic probe count is ceil(Pmax/Pmin - kAnisoRatioSlack) (LeanPyramid::lookup; lean.glsl uses the same).
-inline constexpr float kAnisoRatioSlack = 1e-3f;
-
 enum class LeanFilter : uint8_t {
     None,         // bilinear on level 0 (footprint ignored): the full-resolution reference
     Trilinear,    // isotropic: λ = log2(max(|J1|, |J2|)) (texels), linear between levels floor(λ), floor(λ)+1

@@ -210,7 +210,7 @@ TEST(LeanMoments, FootprintSelectsTheMatchingLevel) {
     EXPECT_GT(vt, va);
 }
 
-// A footprint within kAnisoRatioSlack of isotropic takes one probe: derivative sources that differ by rounding (the
+// A footprint within kGlAnisoRatioSlack of isotropic takes one probe: derivative sources that differ by rounding (the
 // CPU's quad partners, a GPU's dFdx) must not flip a camera-facing surface between one probe at λ and two at λ − 1.
 TEST(LeanMoments, NearIsotropicFootprintTakesOneProbe) {
     LeanPyramid P = LeanPyramid::fromNormalMap(generateNormalMap(NormalMapKind::Bumps, 128, 6));

@@ -180,8 +180,9 @@ void spc_bsdf_glint(SpeculaClosureQuery q, SpeculaShadingInputs s, sampler1DArra
     bool quadValid[2] = bool[2](false, false);
     if (quadDerivatives) {
         vec3 dT[2] = vec3[2](dFdxFine(T), dFdyFine(T)), dB[2] = vec3[2](dFdxFine(B), dFdyFine(B));
-        vec3 dN[2] = vec3[2](dFdxFine(N), dFdyFine(N)), dWo[2] = vec3[2](dFdxFine(wo), dFdyFine(wo));
-        vec3 dP[2] = vec3[2](dFdxFine(s.position), dFdyFine(s.position));
+        vec3 dN[2] = vec3[2](dFdxFine(N), dFdyFine(N));
+        // The view and the position move as the shading inputs say (specula_shading_inputs' dFdxFine, or a host's own).
+        vec3 dWo[2] = vec3[2](s.dwodx, s.dwody), dP[2] = vec3[2](s.dPdx, s.dPdy);
         vec2 side = vec2((int(gl_FragCoord.x) & 1) == 0 ? 1.0 : -1.0, (int(gl_FragCoord.y) & 1) == 0 ? 1.0 : -1.0);
         bool pointLight = !isinf(q.light_distance) && q.light_distance > 0.0;
         vec2 qSelf = derivative == SPC_GLINT_DERIVATIVE_PROJECTED_HALF ? h.xy : -h.xy / max(h.z, 1e-30);

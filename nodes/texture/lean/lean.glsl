@@ -75,7 +75,7 @@ void spc_lean_lookup(sampler2D tex, vec2 uv, vec2 duvdx, vec2 duvdy, int filt, i
         return;
     }
     const int maxAniso = 16;
-    // kAnisoRatioSlack (core/texture/lean_moments.h): near-isotropic footprints take one probe on both sides.
+    // anisotropicProbeCount (core/texture/gl_mip_chain.h): near-isotropic footprints take one probe on both sides.
     int na = pmin > 0.0 ? int(min(ceil(pmax / pmin - 1e-3), float(maxAniso))) : maxAniso;
     int n = max(1, na);
     vec2 major = l1 >= l2 ? duvdx : duvdy;
