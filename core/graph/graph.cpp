@@ -356,6 +356,7 @@ Program Program::compile(const GraphDesc& g, const std::vector<std::pair<int, in
         std::fill(std::begin(ins.out), std::end(ins.out), kNoRegister);
         ins.fn = load && load->gpuSubstitutes && spec.gpuSubstituteCpu ? spec.gpuSubstituteCpu : spec.cpu;
         bool allConst = true;
+        uint32_t dynamicPorts = 0;  // inputs that vary per shading point: bindings and outputs of unfolded nodes
         std::vector<std::string> strings(spec.inputs.size());
         for (size_t k = 0; k < spec.inputs.size(); ++k) {
             const PortSpec& p = spec.inputs[k];
@@ -368,7 +369,7 @@ Program Program::compile(const GraphDesc& g, const std::vector<std::pair<int, in
             switch (v.kind) {
                 case InputValue::Kind::Connection:
                     ins.in[k] = outRegs[v.srcNode][v.srcPort];
-                    if (!constNode[v.srcNode]) allConst = false;
+                    if (!constNode[v.srcNode]) allConst = false, dynamicPorts |= 1u << k;
                     break;
                 case InputValue::Kind::Binding: {
                     auto it = bindingRegs.find(p.binding);
@@ -379,6 +380,7 @@ Program Program::compile(const GraphDesc& g, const std::vector<std::pair<int, in
                     }
                     ins.in[k] = it->second;
                     allConst = false;
+                    dynamicPorts |= 1u << k;
                     break;
                 }
                 case InputValue::Kind::Literal:
@@ -425,12 +427,37 @@ Program Program::compile(const GraphDesc& g, const std::vector<std::pair<int, in
                 ++prog.slots_;
             }
         if (spec.has(kEmissive)) prog.emissive_ = true;
+        if (spec.params) prog.preRead(ins, *spec.params, dynamicPorts);
         prog.code_.push_back(ins);
     }
     for (auto& r : roots) prog.rootRegs_.push_back(outRegs[r.first][r.second]);
     if (!roots.empty() && g.nodes[roots[0].first].spec->outputs[roots[0].second].type == TypeDesc::Closure)
         prog.outSlot_ = int(prog.tmpl_[prog.rootRegs_[0]]);
     return prog;
+}
+
+void Program::preRead(Instr& ins, const ParamLayout& layout, uint32_t dynamicPorts) {
+    // The block is read with the register template: constants, literals and folded outputs are final there; the
+    // closure ports (a pool index, fixed per program) are read per shade all the same.
+    // max_align_t storage: NodeParams refuses parameter structs aligned beyond it.
+    const size_t words = (layout.size + sizeof(std::max_align_t) - 1) / sizeof(std::max_align_t);
+    std::shared_ptr<std::max_align_t[]> storage(new std::max_align_t[words]());
+    std::shared_ptr<char> block(storage, reinterpret_cast<char*>(storage.get()));
+    for (const ParamField& f : layout.fields) {
+        if (f.kind == ParamField::Closure) dynamicPorts |= 1u << f.port;
+        if (dynamicPorts >> f.port & 1) continue;
+        char* dst = block.get() + f.offset;
+        if (f.kind == ParamField::Enum) {
+            int v = int(ins.in[f.port]);
+            std::memcpy(dst, &v, sizeof v);
+        } else {
+            std::memcpy(dst, tmpl_.data() + ins.in[f.port], 4 * size_t(f.width));
+        }
+    }
+    ins.constParams = block.get();
+    ins.constLayout = &layout;
+    ins.dynamicPorts = dynamicPorts;
+    data_.push_back(std::shared_ptr<const void>(block, block.get()));
 }
 
 void Program::execute(const ShadingPoint& sp, ScratchArena& arena, float* r, Closure** cl, Color3* em, Closure* out,

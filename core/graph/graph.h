@@ -76,6 +76,8 @@ public:
     bool emissive() const { return emissive_; }
 
 private:
+    // Fills ins.constParams with the ports of 'layout' that are constant in this program (Instr::constParams).
+    void preRead(Instr& ins, const ParamLayout& layout, uint32_t dynamicPorts);
     void execute(const ShadingPoint& sp, ScratchArena& arena, float* r, Closure** cl, Color3* em, Closure* out, Color3* emission) const;
     struct Load {
         GeomBinding binding;

@@ -5,6 +5,7 @@
 #include "core/graph/node_spec.h"
 
 #include <array>
+#include <cstddef>
 #include <cstring>
 #include <string>
 #include <type_traits>
@@ -78,6 +79,7 @@ template <class P>
 class NodeParams {
     static_assert(std::is_trivially_copyable_v<P> && std::is_default_constructible_v<P>,
                   "a parameter struct is a plain record");
+    static_assert(alignof(P) <= alignof(std::max_align_t), "Program::compile stores parameter blocks max_align_t-aligned");
 
 public:
     NodeParams& f(std::string name, float P::*m, float def, std::string doc) {
@@ -103,7 +105,7 @@ public:
     }
     NodeParams& closure(std::string name, ClosureRef P::*m, std::string doc) {
         ports_.push_back(PortSpec::closure(std::move(name), std::move(doc)));
-        fields_.push_back({uint16_t(offsetOf(m)), 1, Field::Closure, uint8_t(ports_.size() - 1)});
+        addField(offsetOf(m), 1, ParamField::Closure);
         return *this;
     }
     template <class E>
@@ -113,7 +115,7 @@ public:
         PortSpec p = PortSpec::choice(std::move(name), d.values, std::move(doc));
         p.enumDesc = &d;
         ports_.push_back(std::move(p));
-        fields_.push_back({uint16_t(offsetOf(m)), 1, Field::Enum, uint8_t(ports_.size() - 1)});
+        addField(offsetOf(m), 1, ParamField::Enum);
         return *this;
     }
     // A string literal read by the node's prepare step only (file names, colour spaces): not in the struct.
@@ -154,48 +156,73 @@ public:
 
     const std::vector<PortSpec>& ports() const { return ports_; }
 
-    // The typed read of every bound member from the instruction's registers.
+    // The node's ports and its parameter layout (NodeSpec::inputs, NodeSpec::params): the program may then pre-read
+    // the constant ports (Instr::constParams).
+    void describe(NodeSpec& s) const {
+        s.inputs = ports_;
+        s.params = &layout_;
+    }
+
+    // The typed read of every bound member from the instruction's registers: the program's pre-read block, if it
+    // was built for this struct, and then only the ports that vary per shading point.
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic push
+// GCC cannot see that a field's width is the width of its member once readField is inlined (field widths are
+// checked when the port is declared).
+#pragma GCC diagnostic ignored "-Warray-bounds"
+#pragma GCC diagnostic ignored "-Wstringop-overflow"
+#endif
     P read(const EvalContext& c, const Instr& i) const {
         P p;
         char* base = reinterpret_cast<char*>(&p);
-        for (const Field& fd : fields_) {
-            switch (fd.kind) {
-                case Field::Floats: {
-                    // Fixed-size copies (the widths are 1, 2 or 3): a per-float loop was a third of a GGX node's time
-                    // in bench_graph.
-                    const float* src = c.r + i.in[fd.port];
-                    char* dst = base + fd.offset;
-                    switch (fd.width) {
-                        case 1: std::memcpy(dst, src, 4); break;
-                        case 2: std::memcpy(dst, src, 8); break;
-                        case 3: std::memcpy(dst, src, 12); break;
-                        default: std::memcpy(dst, src, 4 * size_t(fd.width)); break;
-                    }
-                    break;
-                }
-                case Field::Enum: {
-                    int v = int(i.in[fd.port]);
-                    std::memcpy(base + fd.offset, &v, sizeof v);
-                    break;
-                }
-                case Field::Closure: {
-                    ClosureRef r{int(c.r[i.in[fd.port]])};
-                    std::memcpy(base + fd.offset, &r, sizeof r);
-                    break;
-                }
-            }
+        if (i.constLayout == &layout_) {
+            std::memcpy(base, i.constParams, sizeof(P));
+            for (uint32_t m = i.dynamicPorts & dynamicCandidates_; m; m &= m - 1)
+                readField(c, i, layout_.fields[fieldOfPort_[__builtin_ctz(m)]], base);
+            return p;
         }
+        for (const ParamField& fd : layout_.fields) readField(c, i, fd, base);
         return p;
     }
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic pop
+#endif
 
 private:
-    struct Field {
-        enum Kind : uint8_t { Floats, Enum, Closure };
-        uint16_t offset;
-        uint8_t width;
-        Kind kind;
-        uint8_t port;
-    };
+    static void readField(const EvalContext& c, const Instr& i, const ParamField& fd, char* base) {
+        switch (fd.kind) {
+            case ParamField::Floats: {
+                // Fixed-size copies (the widths are 1, 2 or 3): a per-float loop was a third of a GGX node's time in
+                // bench_graph.
+                const float* src = c.r + i.in[fd.port];
+                char* dst = base + fd.offset;
+                switch (fd.width) {
+                    case 1: std::memcpy(dst, src, 4); break;
+                    case 2: std::memcpy(dst, src, 8); break;
+                    case 3: std::memcpy(dst, src, 12); break;
+                    default: std::memcpy(dst, src, 4 * size_t(fd.width)); break;
+                }
+                break;
+            }
+            case ParamField::Enum: {
+                int v = int(i.in[fd.port]);
+                std::memcpy(base + fd.offset, &v, sizeof v);
+                break;
+            }
+            case ParamField::Closure: {
+                ClosureRef r{int(c.r[i.in[fd.port]])};
+                std::memcpy(base + fd.offset, &r, sizeof r);
+                break;
+            }
+        }
+    }
+    void addField(size_t offset, uint8_t width, ParamField::Kind kind) {
+        uint8_t port = uint8_t(ports_.size() - 1);
+        if (port >= 32) fatal("more than 32 ports");
+        fieldOfPort_[port] = uint8_t(layout_.fields.size());
+        dynamicCandidates_ |= 1u << port;
+        layout_.fields.push_back({uint16_t(offset), width, kind, port});
+    }
     template <class M>
     static size_t offsetOf(M P::*m) {
         static const P probe{};
@@ -203,12 +230,14 @@ private:
     }
     NodeParams& numeric(std::string name, size_t offset, TypeDesc t, std::array<float, 3> def, std::string doc) {
         ports_.push_back(PortSpec::make(std::move(name), t, def, std::move(doc)));
-        fields_.push_back({uint16_t(offset), uint8_t(typeWidth(t)), Field::Floats, uint8_t(ports_.size() - 1)});
+        addField(offset, uint8_t(typeWidth(t)), ParamField::Floats);
         return *this;
     }
     [[noreturn]] static void fatal(const std::string& what);
     std::vector<PortSpec> ports_;
-    std::vector<Field> fields_;
+    ParamLayout layout_{sizeof(P), alignof(P), {}};
+    std::array<uint8_t, 32> fieldOfPort_{};  // field index of each bound port
+    uint32_t dynamicCandidates_ = 0;         // ports bound to a member (string ports are read by prepare only)
 };
 
 void nodeParamsFatal(const std::string& what);

@@ -184,6 +184,21 @@ enum NodeFlags : uint32_t {
     kEmissive = 1u << 2,          // can produce emission
 };
 
+// Where a node's parameter struct keeps each port (built by NodeParams<P>): Program::compile fills a copy of the struct
+// with every port that is constant in the program, once, so a shade copies that block and reads only the ports that
+// vary per shading point (issue 15: the per-port read loop was a third of a GGX node's time).
+struct ParamField {
+    enum Kind : uint8_t { Floats, Enum, Closure };
+    uint16_t offset;
+    uint8_t width;
+    Kind kind;
+    uint8_t port;
+};
+struct ParamLayout {
+    size_t size = 0, align = 1;
+    std::vector<ParamField> fields;
+};
+
 struct NodeSpec {
     std::string id;        // stable, e.g. "bsdf.ggx"
     int version = 1;
@@ -209,6 +224,9 @@ struct NodeSpec {
     // computes, and the emitter has nothing to warn about.
     std::string gpuSubstitute;
     CpuFn gpuSubstituteCpu = nullptr;
+    // The parameter struct that cpu (and gpuSubstituteCpu) read with NodeParams<P>::read, or null (the node reads its
+    // registers itself). Set by NodeParams<P>::describe.
+    const ParamLayout* params = nullptr;
 
     bool has(uint32_t f) const { return (flags & f) != 0; }
     int inputIndex(const std::string& n) const;
@@ -236,6 +254,11 @@ struct Instr {
     uint16_t in[kMaxInputs];
     uint16_t out[kMaxOutputs];
     uint8_t usedOutputs = 0xFF;  // bit k: output k is read by another node or is a root (lazy outputs may skip work)
+    // The node's parameter struct with every port that is constant in the program already read (layout
+    // NodeSpec::params; owned by the program), and the input ports (bit k) that vary per shading point. Null: read all.
+    const void* constParams = nullptr;
+    const ParamLayout* constLayout = nullptr;
+    uint32_t dynamicPorts = 0xFFFFFFFFu;
 };
 
 // Per-evaluation state the instruction functions see.

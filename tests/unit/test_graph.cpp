@@ -284,3 +284,39 @@ TEST(GraphNodes, MathClosedForms) {
     auto c = evalPattern({{"f", {{"type", "fresnel.conductor"}, {"inputs", {{"eta", 1.5}, {"k", 2.0}, {"cos_theta", 1.0}}}}}}, "f", "F");
     EXPECT_NEAR(c[0], (0.25f + 4.f) / (6.25f + 4.f), 1e-6f);
 }
+
+// Program::compile pre-reads the ports that are constant in a program into the node's parameter struct
+// (Instr::constParams) and reads only the varying ones per shade: a port fed by a literal, by a folded constant chain
+// and by a node that varies per shading point (here the normal's length times 0.4, exactly 0.4 at a unit normal) must
+// shade the same lobe; the varying one must follow the shading point.
+TEST(GraphMaterial, PreReadConstantPortsMatchPortsReadPerShade) {
+    auto ggx = [](const json& roughness, json extra) {
+        extra["g"] = {{"type", "bsdf.ggx"},
+                      {"inputs", {{"roughness", roughness}, {"anisotropy", 0.5}, {"f0", {0.9, 0.6, 0.5}}, {"fresnel", "schlick"}}}};
+        return load({{"nodes", extra}, {"output", "@g.bsdf"}});
+    };
+    auto literal = ggx(0.4, json::object());
+    auto folded = ggx("@k.out", {{"k", {{"type", "math.mul.float"}, {"inputs", {{"a", 0.8}, {"b", 0.5}}}}}});
+    json varying = {{"n", {{"type", "geometry.normal"}}},
+                    {"v", {{"type", "convert.normal3_to_vector3"}, {"inputs", {{"in", "@n.N"}}}}},
+                    {"len", {{"type", "math.length.vector3"}, {"inputs", {{"v", "@v.out"}}}}},
+                    {"k", {{"type", "math.mul.float"}, {"inputs", {{"a", "@len.out"}, {"b", 0.4}}}}}};
+    auto dynamic = ggx("@k.out", varying);
+    ShadingPoint sp = makeSp();
+    Vec3 wo = glm::normalize(Vec3(0.2f, 0.1f, 1.f)), wi = glm::normalize(Vec3(-0.3f, 0.2f, 0.9f));
+    auto value = [&](const std::shared_ptr<Material>& m, const ShadingPoint& at) {
+        ScratchArena arena;
+        Closure cl;
+        m->shade(at, arena, cl);
+        return test::query(cl, wo, wi).f.specular;
+    };
+    Color3 ref = value(literal, sp);
+    EXPECT_GT(ref.x, 0.f);
+    EXPECT_EQ(value(folded, sp), ref);
+    EXPECT_EQ(value(dynamic, sp), ref);
+    // A normal of length 2 (the node normalises it for its frame, the length graph reads it raw): roughness 0.8.
+    ShadingPoint longer = sp;
+    longer.n = Vec3(0, 0, 2);
+    EXPECT_EQ(value(literal, longer), ref);
+    EXPECT_EQ(value(dynamic, longer), value(ggx(0.8, json::object()), sp));
+}

@@ -52,7 +52,7 @@ void reg(NodeRegistry& r) {
     s.doc = "Beckmann microfacet reflection with a LEAN slope Gaussian (Olano & Baker 2010): mean slope and covariance "
             "(e.g. from texture.lean) plus the material roughness as (alpha^2/2) I; Smith G2 of the shifted Gaussian. "
             "Quad lights in closed form (polygon queries): the LTC of an equivalent GGX (tilted frame, alpha^2 = 1.5 Sigma).";
-    s.inputs = kParams.ports();
+    kParams.describe(s);
     s.outputs = kOutputs.ports();
     s.cpu = &cpu;
     s.glslFunction = "spc_bsdf_beckmann_lean";

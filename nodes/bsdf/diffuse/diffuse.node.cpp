@@ -30,7 +30,7 @@ void reg(NodeRegistry& r) {
     s.category = "bsdf";
     s.doc = "Lambertian diffuse reflection, f = color/π. Quad lights in closed form (polygon queries): Lambert's form "
             "factor (the LTC with M = I).";
-    s.inputs = kParams.ports();
+    kParams.describe(s);
     s.outputs = kOutputs.ports();
     s.cpu = &cpu;
     s.glslFunction = "spc_bsdf_diffuse";

@@ -28,7 +28,7 @@ void reg(NodeRegistry& r) {
     s.id = "bsdf.emission";
     s.category = "bsdf";
     s.doc = "Emission closure: radiance color·strength (both sides), no scattering.";
-    s.inputs = kParams.ports();
+    kParams.describe(s);
     s.outputs = kOutputs.ports();
     s.flags = kEmissive;
     s.cpu = &cpu;

@@ -47,7 +47,7 @@ void reg(NodeRegistry& r) {
     s.category = "bsdf";
     s.doc = "Anisotropic GGX reflection, height-correlated Smith masking-shadowing (Heitz 2014, Eq. 99), unfiltered. "
             "Quad lights in closed form (polygon queries): its fitted LTC (HDHN16), Fresnel as F0·mag + (1 − F0)·fres.";
-    s.inputs = kParams.ports();
+    kParams.describe(s);
     s.outputs = kOutputs.ports();
     s.cpu = &cpu;
     s.glslFunction = "spc_bsdf_ggx";

@@ -124,7 +124,7 @@ void reg(NodeRegistry& r) {
     s.doc = "GGX reflection with NDF filtering for specular anti-aliasing (Tokuyoshi & Kaplanyan 2021): roughness matrix, "
             "height-correlated Smith G2, slope-space (K16), projected-space exact/approximate and isotropic filters. "
             "Quad lights in closed form (polygon queries): the LTC of its sampling matrix.";
-    s.inputs = kParams.ports();
+    kParams.describe(s);
     s.outputs = kOutputs.ports();
     s.flags = kNeedsDerivatives;
     s.cpu = &cpu;

@@ -181,7 +181,7 @@ void reg(NodeRegistry& r) {
             "Quad lights in closed form on the CPU (polygon queries, render.area_lights \"ltc\"): each EWA cell's "
             "slope distribution integrated over the light's half-slope region, at the GGAA MIPs of the light's centre (glint_area.h). The GLSL "
             "function does not answer polygon queries: it returns partial = true and the host samples the light.";
-    s.inputs = kParams.ports();
+    kParams.describe(s);
     s.outputs = kOutputs.ports();
     s.flags = kNeedsDerivatives;
     s.resources = {{"dictionary", "sampler1DArray", ResourceSpec::Kind::BuiltinTable,

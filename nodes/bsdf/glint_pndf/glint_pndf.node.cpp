@@ -234,7 +234,7 @@ void reg(NodeRegistry& r) {
             "step at any spp (the glints are a property of the image, like bsdf.glint). The manifold is cached on disk "
             "by content hash ($SPECULA_CACHE_DIR, else $XDG_CACHE_HOME/specula or ~/.cache/specula). Quad lights are "
             "sampled (no polygon query).";
-    s.inputs = kParams.ports();
+    kParams.describe(s);
     s.outputs = kOutputs.ports();
     s.flags = kNeedsDerivatives;
     s.cpu = &cpu;

@@ -273,7 +273,7 @@ void reg(NodeRegistry& r) {
             "'normals', plus the base GGX tables), so a host must not change these two uniforms without re-exporting "
             "the resources. GLSL: direction queries (f·cos = tint·magnitude·D_ltc per lobe) and polygon queries (the "
             "LTC polygon integral, exact clip or clip-free, shared/ltc.glsl).";
-    s.inputs = kParams.ports();
+    kParams.describe(s);
     s.outputs = kOutputs.ports();
     s.flags = kNeedsDerivatives;
     s.cpu = &cpu;

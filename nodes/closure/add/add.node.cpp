@@ -29,7 +29,7 @@ void reg(NodeRegistry& r) {
     s.id = "closure.add";
     s.category = "closure";
     s.doc = "Sum of two closures a + b.";
-    s.inputs = kParams.ports();
+    kParams.describe(s);
     s.outputs = kOutputs.ports();
     s.cpu = &cpu;
     s.glslFunction = "spc_closure_add";

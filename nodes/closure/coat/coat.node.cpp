@@ -64,7 +64,7 @@ void reg(NodeRegistry& r) {
             "for tint 1 the base scale is 1 − weight·E. 'normal' is the coat's own (the shading normal by default), so "
             "a flake normal map can sit under a smooth coat. Not reciprocal (the scale depends on wo, as in every "
             "albedo-scaling layer). Quad lights: the coat lobe's LTC (as bsdf.ggx) plus the scaled base's answers.";
-    s.inputs = kParams.ports();
+    kParams.describe(s);
     s.outputs = kOutputs.ports();
     s.cpu = &cpu;
     s.glslFunction = "spc_closure_coat";

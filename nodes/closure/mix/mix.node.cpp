@@ -31,7 +31,7 @@ void reg(NodeRegistry& r) {
     s.id = "closure.mix";
     s.category = "closure";
     s.doc = "Blend of two closures a·(1 − t) + b·t.";
-    s.inputs = kParams.ports();
+    kParams.describe(s);
     s.outputs = kOutputs.ports();
     s.cpu = &cpu;
     s.glslFunction = "spc_closure_mix";

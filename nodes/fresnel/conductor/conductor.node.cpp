@@ -27,7 +27,7 @@ void reg(NodeRegistry& r) {
     s.id = "fresnel.conductor";
     s.category = "fresnel";
     s.doc = "Exact conductor Fresnel reflectance for a complex IOR eta + i k per RGB channel (unpolarised average of r_s and r_p).";
-    s.inputs = kParams.ports();
+    kParams.describe(s);
     s.outputs = kOutputs.ports();
     s.flags = kPure;
     s.cpu = &cpu;

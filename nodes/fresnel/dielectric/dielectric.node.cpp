@@ -24,7 +24,7 @@ void reg(NodeRegistry& r) {
     s.id = "fresnel.dielectric";
     s.category = "fresnel";
     s.doc = "Exact unpolarised dielectric Fresnel reflectance for relative IOR (Walter et al. 2007, Eq. 22); 1 under total internal reflection.";
-    s.inputs = kParams.ports();
+    kParams.describe(s);
     s.outputs = kOutputs.ports();
     s.flags = kPure;
     s.cpu = &cpu;

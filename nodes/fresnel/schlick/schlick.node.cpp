@@ -25,7 +25,7 @@ void reg(NodeRegistry& r) {
     s.id = "fresnel.schlick";
     s.category = "fresnel";
     s.doc = "Schlick's approximation F0 + (1 - F0)(1 - cos)^5 (Schlick 1994, Eq. 24).";
-    s.inputs = kParams.ports();
+    kParams.describe(s);
     s.outputs = kOutputs.ports();
     s.flags = kPure;
     s.cpu = &cpu;

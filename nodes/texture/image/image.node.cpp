@@ -140,7 +140,7 @@ void reg(NodeRegistry& r) {
     s.id = "texture.image";
     s.category = "texture";
     s.doc = "Filtered image lookup. v = 0 is the bottom row (OpenGL convention).";
-    s.inputs = kParams.ports();
+    kParams.describe(s);
     s.outputs = kOutputs.ports();
     s.flags = kNeedsDerivatives;
     s.resources = {{"image", "sampler2D", ResourceSpec::Kind::ImageFile,

@@ -122,7 +122,7 @@ void reg(NodeRegistry& r) {
     s.doc = "LEAN mapping (Olano & Baker 2010): footprint-filtered first and second slope moments of a tangent-space "
             "normal map -> mean normal, mean slope, (sigma_x, sigma_y, rho) and the slope covariance, in the frame "
             "(T, N x T, N) of the normal/tangent inputs. Slopes: x = -nx/nz, y = -ny/nz.";
-    s.inputs = kParams.ports();
+    kParams.describe(s);
     s.outputs = kOutputs.ports();
     s.flags = kNeedsDerivatives;
     s.resources = {{"moments", "sampler2D", ResourceSpec::Kind::DerivedImage,

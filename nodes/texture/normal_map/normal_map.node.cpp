@@ -72,7 +72,7 @@ void reg(NodeRegistry& r) {
     s.id = "texture.normal_map";
     s.category = "texture";
     s.doc = "Tangent-space normal map to a world-space shading normal (feed it to a BSDF's normal).";
-    s.inputs = kParams.ports();
+    kParams.describe(s);
     s.outputs = kOutputs.ports();
     s.flags = kPure;
     s.cpu = &cpu;

@@ -38,7 +38,7 @@ void reg(NodeRegistry& r) {
     s.id = "texture.uv_transform";
     s.category = "texture";
     s.doc = "Scale, rotate and offset texture coordinates, carrying the uv footprint (duvdx, duvdy) along.";
-    s.inputs = kParams.ports();
+    kParams.describe(s);
     s.outputs = kOutputs.ports();
     s.flags = kPure | kNeedsDerivatives;
     s.cpu = &cpu;
