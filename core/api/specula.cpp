@@ -12,9 +12,35 @@ namespace fs = std::filesystem;
 namespace specula {
 
 std::string writeRenderOutputs(const std::string& exrPath, const Scene& scene, const ImageSet& images) {
+    // Both files are written to temporaries first and renamed only once both exist: a PNG that cannot be written
+    // (a full disk, a folder in its place) must not leave a new EXR over the old one (issue 16).
     std::string png = fs::path(exrPath).replace_extension(".png").string();
-    writeExr(exrPath, images, *scene.colorConfig);
-    writePng(png, images, *scene.colorConfig, scene.color.view, scene.color.exposure);
+    // A rename onto a folder fails: find that before either file is committed.
+    for (const std::string& target : {exrPath, png})
+        if (fs::is_directory(target)) throw ImageIoError("cannot write '" + target + "': a folder has that name");
+    std::string tmpExr = createTempFileNear(exrPath), tmpPng;
+    auto removeTemporaries = [&] {
+        std::error_code ec;
+        fs::remove(tmpExr, ec);
+        if (!tmpPng.empty()) fs::remove(tmpPng, ec);
+    };
+    try {
+        writeExr(tmpExr, images, *scene.colorConfig);
+        tmpPng = createTempFileNear(png);
+        writePng(tmpPng, images, *scene.colorConfig, scene.color.view, scene.color.exposure);
+    } catch (const ImageIoError& e) {
+        removeTemporaries();
+        // The temporaries' names mean nothing to the user: name the file that was asked for.
+        std::string msg = e.what();
+        for (auto [tmp, real] : {std::pair{tmpExr, exrPath}, std::pair{tmpPng, png}})
+            for (size_t at; !tmp.empty() && (at = msg.find(tmp)) != std::string::npos;) msg.replace(at, tmp.size(), real);
+        throw ImageIoError(msg);
+    } catch (...) {
+        removeTemporaries();
+        throw;
+    }
+    commitTempFile(tmpExr, exrPath);
+    commitTempFile(tmpPng, png);
     return png;
 }
 
@@ -29,6 +55,15 @@ bool samePath(const std::string& a, const std::string& b) {
     return !ea && !eb && pa == pb;
 }
 }  // namespace
+
+void refuseOverwritingInput(const std::string& output, const std::vector<std::string>& inputs, const std::string& option) {
+    if (output.empty()) return;
+    for (const std::string& in : inputs) {
+        std::error_code ec;
+        if (!in.empty() && fs::exists(output, ec) && fs::equivalent(output, in, ec) && !ec)
+            throw Error(ErrorCode::Usage, "", option + " '" + output + "' is the input file '" + in + "'");
+    }
+}
 
 void checkOutputPath(const std::string& exrPath, const std::string& inputPath) {
     if (fs::path(exrPath).extension() != ".exr")

@@ -12,6 +12,7 @@
 
 #include <exception>
 #include <string>
+#include <vector>
 
 namespace specula {
 
@@ -26,6 +27,10 @@ std::string partialOutputPath(const std::string& exrPath);
 // PNG) is the input scene file 'inputPath' (never clobber the input), Error(Io) if its folder is missing.
 // The messages are the CLI's ("output 'x' must end in .exr (a PNG is written beside it)", ...).
 void checkOutputPath(const std::string& exrPath, const std::string& inputPath = "");
+
+// No command writes over its own input: Error(Usage) "<option> 'out' is the input file 'in'" if 'output' names the
+// same file as one of 'inputs' (after resolving links and relative paths; missing files never match).
+void refuseOverwritingInput(const std::string& output, const std::vector<std::string>& inputs, const std::string& option);
 
 struct WrittenFiles {
     std::string exr, png;  // png empty for a partial image

@@ -4,6 +4,7 @@
 
 #include <cstdio>
 
+#include "core/api/specula.h"
 #include "core/codegen/glsl_emitter.h"
 #include "core/codegen/glsl_manifest.h"
 #include "core/color/color_config.h"
@@ -140,6 +141,9 @@ int run(const std::function<void()>& body) {
     } catch (const IoError& e) {
         std::fprintf(stderr, "specula: error: %s\n", e.what());
         return kExitIo;
+    } catch (const Error& e) {  // libspecula's policies (core/api/specula.h) carry their own code
+        std::fprintf(stderr, "specula: error: %s\n", e.what());
+        return e.exitCode();
     } catch (const std::exception& e) {
         std::fprintf(stderr, "specula: error: %s\n", e.what());
         return kExitBadInput;
@@ -307,8 +311,7 @@ void addGraphCommands(CLI::App& app, int& exitCode) {
     glsl->add_option("--resources", *gRes, "write every resource as EXR files plus manifest.json into this folder");
     glsl->callback([=, &exitCode] {
         exitCode = run([&] {
-            if (std::filesystem::exists(*gOut) && std::filesystem::equivalent(*gOut, *gFile))
-                throw UsageError("-o '" + *gOut + "' is the input file");
+            refuseOverwritingInput(*gOut, {*gFile}, "-o");
             if (!outputFolderExists(*gOut)) throw IoError("output folder of '" + *gOut + "' does not exist");
             Loaded l = readMaterial(*gFile, *gMat);
             graph::GraphDesc g = graph::parseGraph(l.material, l.pointer);
@@ -406,6 +409,8 @@ void addGraphCommands(CLI::App& app, int& exitCode) {
     plot->add_option("--raw", p->raw, "also write the float values as an EXR (beauty: f·cos RGB of the lobe panel; 'ndf' layer)");
     plot->callback([=, &exitCode] {
         exitCode = run([&] {
+            refuseOverwritingInput(p->out, {p->file}, "-o");
+            refuseOverwritingInput(p->raw, {p->file, p->out}, "--raw");
             Vec3 wo = parseDirection(p->wo, "--wo");
             if (p->size < 16 || p->size > 4096) throw UsageError("--size must be in [16, 4096]");
             Loaded l = readMaterial(p->file, p->material);

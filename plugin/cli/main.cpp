@@ -191,6 +191,12 @@ int main(int argc, char** argv) {
     CompareMaskOptions maskOpts;
     addCompareMaskOptions(*compare, maskOpts);
     compare->callback([&] {
+        try {
+            refuseOverwritingInput(diffOut, {imgA, imgB}, "--diff");
+        } catch (const Error& e) {
+            exitCode = reportError(e, e.exitCode());
+            return;
+        }
         if (maskOpts.active()) {  // masked metrics and frame sequences (plugin/cli/validation_cli.cpp)
             exitCode = runMaskedCompare(imgA, imgB, aov, maskOpts, compareJson, diffOut);
             return;

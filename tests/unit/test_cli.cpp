@@ -402,3 +402,33 @@ TEST(Cli, HostileInputsGetOneClearErrorAndWriteNothing) {
     EXPECT_EQ(test::runCli("info /dev/zero", &out), 1) << out;
     EXPECT_NE(out.find("larger than 256 MiB"), std::string::npos) << out;
 }
+
+// Issue 16: a render whose PNG cannot be written leaves the old EXR as it was (both files are committed together),
+// and no command writes over one of its own inputs.
+TEST(Cli, NoCommandClobbersAnOutputPairOrItsOwnInput) {
+    std::string dir = test::tempDir("cli");
+    test::writeFile(dir + "/s.json", kSmallScene);
+    std::string out;
+    // pair.exr holds an earlier result; a folder stands where pair.png would go.
+    test::writeFile(dir + "/pair.exr", "an earlier render");
+    fs::create_directories(dir + "/pair.png");
+    EXPECT_EQ(test::runCli("render " + q(dir + "/s.json") + " -o " + q(dir + "/pair.exr") + " --progress none", &out), 3) << out;
+    EXPECT_NE(out.find("pair.png"), std::string::npos) << out;
+    EXPECT_EQ(test::readFile(dir + "/pair.exr"), "an earlier render");
+    for (auto& e : fs::directory_iterator(dir))
+        EXPECT_EQ(e.path().filename().string().find(".tmp-"), std::string::npos) << e.path();
+    // compare --diff over one of the compared images; plot and glsl -o over the material file.
+    ASSERT_EQ(test::runCli("render " + q(dir + "/s.json") + " -o " + q(dir + "/a.exr") + " --progress none"), 0);
+    const std::string a = test::readFile(dir + "/a.exr");
+    EXPECT_EQ(test::runCli("compare " + q(dir + "/a.exr") + " " + q(dir + "/a.exr") + " --diff " + q(dir + "/a.exr"), &out), 2) << out;
+    EXPECT_NE(out.find("--diff"), std::string::npos) << out;
+    EXPECT_EQ(test::readFile(dir + "/a.exr"), a);
+    const std::string scene = test::readFile(dir + "/s.json");
+    EXPECT_EQ(test::runCli("plot " + q(dir + "/s.json") + " --material m --wo 0,0,1 -o " + q(dir + "/s.json"), &out), 2) << out;
+    EXPECT_NE(out.find("is the input file"), std::string::npos) << out;
+    EXPECT_EQ(test::runCli("plot " + q(dir + "/s.json") + " --material m --wo 0,0,1 -o " + q(dir + "/p.png") + " --raw " +
+                               q(dir + "/./s.json"), &out), 2) << out;
+    EXPECT_FALSE(fs::exists(dir + "/p.png"));
+    EXPECT_EQ(test::runCli("glsl " + q(dir + "/s.json") + " --material m -o " + q(dir + "/s.json"), &out), 2) << out;
+    EXPECT_EQ(test::readFile(dir + "/s.json"), scene);
+}
