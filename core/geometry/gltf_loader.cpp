@@ -16,7 +16,11 @@
 #include <glm/gtc/quaternion.hpp>
 
 #include <algorithm>
+#include <cstdlib>
 #include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
 
 namespace specula::detail {
 
@@ -31,6 +35,66 @@ std::string trimmed(std::string s) {
     while (!s.empty() && (s.back() == '\n' || s.back() == '\r' || s.back() == ' ')) s.pop_back();
     return s;
 }
+
+// External buffers: a URI such as "../../../../etc/passwd" must not be followed (issue 16). A buffer file is read only
+// if it resolves (links included) inside the glTF file's folder or one of the folders listed in SPECULA_RESOURCE_PATH
+// (':'-separated), is a regular file and is at most kMaxBufferBytes; the error never tells anything about a refused file.
+constexpr uintmax_t kMaxBufferBytes = uintmax_t(4) << 30;
+
+struct BufferAccess {
+    std::vector<std::filesystem::path> roots;
+    std::string baseDir;  // the glTF's folder as tinygltf spells it (the prefix of the URI's candidate path)
+    std::string refused;  // the first URI refused, for the error message
+    bool inside(const std::string& file) const {
+        std::error_code ec;
+        std::filesystem::path p = std::filesystem::weakly_canonical(file, ec);
+        if (ec) return false;
+        for (const auto& root : roots) {
+            auto [r, q] = std::mismatch(root.begin(), root.end(), p.begin(), p.end());
+            if (r == root.end()) return true;
+        }
+        return false;
+    }
+};
+
+bool bufferExists(const std::string& file, void* user) {
+    auto* access = static_cast<BufferAccess*>(user);
+    std::error_code ec;
+    if (!access->inside(file)) {
+        // tinygltf also tries the URI against the working folder ("./uri"): only the glTF's own folder's candidate
+        // is the user's URI, and only that one is reported.
+        if (access->refused.empty() && file.rfind(access->baseDir, 0) == 0) access->refused = file;
+        return false;
+    }
+    return std::filesystem::is_regular_file(file, ec);
+}
+
+bool readBuffer(std::vector<unsigned char>* out, std::string* err, const std::string& file, void* user) {
+    auto* access = static_cast<BufferAccess*>(user);
+    std::error_code ec;
+    if (!access->inside(file) || !std::filesystem::is_regular_file(file, ec)) {
+        if (err) *err = "not a file inside the allowed folders";
+        return false;
+    }
+    uintmax_t size = std::filesystem::file_size(file, ec);
+    if (ec || size > kMaxBufferBytes) {
+        if (err) *err = "larger than 4 GiB";
+        return false;
+    }
+    std::ifstream in(file, std::ios::binary);
+    out->resize(size_t(size));
+    if (size > 0 && !in.read(reinterpret_cast<char*>(out->data()), std::streamsize(size))) {
+        if (err) *err = "read failed";
+        return false;
+    }
+    return true;
+}
+
+std::string expandNothing(const std::string& path, void*) { return path; }  // no ~ or $VAR expansion in URIs
+
+// a + b and a * b, or false on overflow (accessor bounds come from the file: 2^57 + 1 elements wrapped the product).
+bool addSize(size_t a, size_t b, size_t& r) { return !__builtin_add_overflow(a, b, &r); }
+bool mulSize(size_t a, size_t b, size_t& r) { return !__builtin_mul_overflow(a, b, &r); }
 
 // A bounds-checked view of one accessor's elements.
 struct AccessorView {
@@ -155,11 +219,14 @@ private:
         int stride = acc.ByteStride(bv);
         if (compSize <= 0 || nComp <= 0 || stride <= 0)
             throwMeshError(path_, std::string(what) + ": invalid component type or byteStride");
-        size_t begin = bv.byteOffset + acc.byteOffset;
-        size_t viewEnd = std::min(bv.byteOffset + bv.byteLength, buf.data.size());
-        size_t elemSize = size_t(compSize) * size_t(nComp);
-        if (acc.count > 0 && (begin > viewEnd || (acc.count - 1) * size_t(stride) + elemSize > viewEnd - begin))
-            throwMeshError(path_, std::string(what) + ": accessor exceeds its buffer");
+        size_t begin = 0, viewEnd = 0, span = 0, last = 0;
+        const size_t elemSize = size_t(compSize) * size_t(nComp);
+        bool fits = addSize(bv.byteOffset, acc.byteOffset, begin) && addSize(bv.byteOffset, bv.byteLength, viewEnd);
+        viewEnd = std::min(viewEnd, buf.data.size());
+        if (acc.count > 0)
+            fits = fits && begin <= viewEnd && mulSize(acc.count - 1, size_t(stride), span) &&
+                   addSize(span, elemSize, last) && last <= viewEnd - begin;
+        if (!fits) throwMeshError(path_, std::string(what) + ": accessor exceeds its buffer");
         AccessorView v;
         v.data = buf.data.data() + begin;
         v.stride = size_t(stride);
@@ -266,10 +333,25 @@ private:
 TriangleMesh loadGltfMesh(const std::string& path, bool binary) {
     tinygltf::TinyGLTF loader;
     loader.SetImageLoader(&ignoreImage, nullptr);
+    BufferAccess access;
+    access.baseDir = tinygltf::GetBaseDir(path);
+    std::error_code ec;
+    access.roots.push_back(std::filesystem::weakly_canonical(std::filesystem::absolute(path).parent_path(), ec));
+    if (const char* extra = std::getenv("SPECULA_RESOURCE_PATH")) {
+        std::stringstream list(extra);
+        for (std::string dir; std::getline(list, dir, ':');)
+            if (!dir.empty()) access.roots.push_back(std::filesystem::weakly_canonical(dir, ec).lexically_normal());
+    for (auto& root : access.roots)
+        if (root.has_parent_path() && root.filename().empty()) root = root.parent_path();  // "dir/" -> "dir"
+    }
+    loader.SetFsCallbacks({&bufferExists, &expandNothing, &readBuffer, nullptr, &access});
     tinygltf::Model model;
     std::string err, warn;
     bool ok = binary ? loader.LoadBinaryFromFile(&model, &err, &warn, path)
                      : loader.LoadASCIIFromFile(&model, &err, &warn, path);
+    if (!ok && !access.refused.empty())
+        throwMeshError(path, "a buffer URI leads outside the glTF file's folder; buffers are read only from that folder "
+                             "and from the folders listed in SPECULA_RESOURCE_PATH (docs/scene-format.md)");
     if (!ok) throwMeshError(path, "glTF parse error: " + (err.empty() ? std::string("unknown error") : trimmed(err)));
     return GltfImporter(path, model).run();
 }

@@ -10,7 +10,6 @@
 #include <algorithm>
 #include <array>
 #include <cctype>
-#include <cerrno>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -80,7 +79,31 @@ struct TripleHash {
     }
 };
 
+// tinyobjloader reads a coordinate it cannot parse ("nan", "abc") as 0 and one that overflows as infinity: both would
+// load as a silently wrong mesh (issue 16). The v/vn/vt lines are checked here first, with the line number.
+void checkObjNumbers(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    std::string line;
+    for (size_t lineNo = 1; std::getline(in, line); ++lineNo) {
+        size_t at = line.find_first_not_of(" \t");
+        if (at == std::string::npos || line[at] != 'v') continue;
+        std::istringstream words(line.substr(at));
+        std::string tag, word;
+        words >> tag;
+        if (tag != "v" && tag != "vn" && tag != "vt") continue;
+        while (words >> word) {
+            if (word[0] == '#') break;
+            char* end = nullptr;
+            const float x = std::strtof(word.c_str(), &end);  // underflow to 0 or a denormal is fine
+            if (end != word.c_str() + word.size() || !std::isfinite(x))
+                throwMeshError(path, "line " + std::to_string(lineNo) + ": '" + word + "' in a '" + tag +
+                                         "' line is not a finite number");
+        }
+    }
+}
+
 TriangleMesh loadObj(const std::string& path) {
+    checkObjNumbers(path);
     tinyobj::ObjReaderConfig config;
     config.triangulate = true;
     config.vertex_color = false;

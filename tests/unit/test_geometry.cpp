@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include <filesystem>
+
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -761,6 +763,49 @@ TEST_F(LoaderTest, GltfExternalBufferResolvesNextToTheFile) {
     expectLoadError(path, "glTF parse error");
 }
 
+// Issue 16: a buffer URI that leads out of the glTF's folder is not followed (and nothing about that file is told)
+// unless SPECULA_RESOURCE_PATH lists its folder; an accessor count that overflows the bounds check is refused.
+TEST_F(LoaderTest, GltfBuffersStayInsideAllowedFoldersAndAccessorsCannotOverflow) {
+    TriangleMesh q = quadFixture();
+    GltfBuilder b;
+    std::string prim = b.addPrimitive(q, false);
+    write("outside/quad.bin", b.bin);
+    std::string path = write("inside/escape.gltf", b.json("[{\"primitives\":[" + prim + "]}]", "[{\"mesh\":0}]",
+                                                          kOneNodeScene, "../outside/quad.bin"));
+    ::unsetenv("SPECULA_RESOURCE_PATH");
+    expectLoadError(path, "a buffer URI leads outside the glTF file's folder");
+    std::string msg;
+    try {
+        loadMesh(path);
+    } catch (const std::exception& e) {
+        msg = e.what();
+    }
+    EXPECT_EQ(msg.find("outside/quad.bin"), std::string::npos) << msg;  // not even the resolved name
+    std::string absolute = write("inside/absolute.gltf", b.json("[{\"primitives\":[" + prim + "]}]", "[{\"mesh\":0}]",
+                                                               kOneNodeScene, dir + "/outside/quad.bin"));
+    expectLoadError(absolute, "File not found");  // tinygltf joins it under the folder; its "./" retry is refused
+    // A link inside the folder that points out of it is refused the same way.
+    std::filesystem::create_symlink(dir + "/outside/quad.bin", dir + "/inside/link.bin");
+    expectLoadError(write("inside/link.gltf", b.json("[{\"primitives\":[" + prim + "]}]", "[{\"mesh\":0}]",
+                                                     kOneNodeScene, "link.bin")),
+                    "leads outside");
+    // The user opts in by listing the folder.
+    ::setenv("SPECULA_RESOURCE_PATH", (dir + "/elsewhere:" + dir + "/outside/").c_str(), 1);
+    expectSameMesh(loadMesh(path), withTangents(q), "allowed folder");
+    ::unsetenv("SPECULA_RESOURCE_PATH");
+    // 2^57 + 1 elements of 128-byte stride: (count - 1) * stride wraps to 0 in 64 bits.
+    std::string huge = b.json("[{\"primitives\":[" + prim + "]}]", "[{\"mesh\":0}]", kOneNodeScene, "quad.bin");
+    write("inside/quad.bin", b.bin);
+    size_t at = huge.find("\"count\":");
+    ASSERT_NE(at, std::string::npos);
+    size_t end = huge.find_first_of(",}", at);
+    huge.replace(at, end - at, "\"count\":144115188075855873");
+    size_t view = huge.find("\"byteLength\"", huge.find("\"bufferViews\""));
+    ASSERT_NE(view, std::string::npos);
+    huge.insert(view, "\"byteStride\":128,");
+    expectLoadError(write("inside/huge.gltf", huge), "accessor exceeds its buffer");
+}
+
 TEST_F(LoaderTest, GltfUvAndTangentConvention) {
     // A quad mapped the usual way: u along +x and the image's top edge at y = +1. glTF's texcoords put
     // the image's top row at v = 0, so the file stores v_gltf = 0 there, and a conforming exporter
@@ -922,6 +967,11 @@ TEST_F(LoaderTest, ErrorsNameThePathAndReason) {
     expectLoadError(write("noext", "v 0 0 0\n"), "unknown mesh extension");
     expectLoadError(write("empty.obj", "v 0 0 0\nv 1 0 0\n"), "no triangles");
     expectLoadError(write("range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n"), "out of range");
+    // tinyobjloader reads these as 0 or infinity: refused with the line (issue 16).
+    expectLoadError(write("nan.obj", "v 0 0 0\nv nan nan nan\nv 0 1 0\nf 1 2 3\n"),
+                    "line 2: 'nan' in a 'v' line is not a finite number");
+    expectLoadError(write("inf.obj", "v 0 0 0\nv 1 0 0\nv 0 1e39 0\nf 1 2 3\n"), "line 3: '1e39'");
+    expectLoadError(write("junk.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1x\nf 1//1 2//1 3//1\n"), "line 4: '1x'");
     expectLoadError(write("bad.ply", "plx\nformat ascii 1.0\nend_header\n"), "not a PLY file");
     expectLoadError(write("badfmt.ply", "ply\nformat binary_middle_endian 1.0\nend_header\n"), "unknown format");
     expectLoadError(write("noend.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n"),
