@@ -75,5 +75,8 @@ std::string glslFloat(float v);
 std::string glslLiteral(graph::TypeDesc t, const std::array<float, 3>& v);
 // A valid, readable GLSL identifier from a node id.
 std::string glslIdentifier(const std::string& s);
+// Scene-supplied text (names, ids, file names) made safe inside a // comment: bytes outside printable ASCII and
+// backslashes become '?'.
+std::string glslCommentText(const std::string& s);
 
 }  // namespace specula::codegen

@@ -5,6 +5,7 @@
 #include "core/codegen/glsl_signature.h"
 #include "core/codegen/glsl_sources.h"
 #include "core/graph/graph.h"
+#include "core/util/error.h"
 #include "glsl_harness.h"
 
 #include <gtest/gtest.h>
@@ -141,4 +142,35 @@ TEST(GlslEmitter, ReadableDeterministicOutput) {
         if (typeWidth(u.type) == 3) EXPECT_EQ(u.offset % 16, 0u) << u.name;
     EXPECT_EQ(codegen::glslFloat(0.1f), "0.100000001");
     EXPECT_EQ(codegen::glslFloat(2.f), "2.0");
+}
+
+// Issue 16: names from the scene file reach the module only as identifiers (glslIdentifier) or inside comments
+// (glslCommentText): a newline in a material name or node id, or a trailing backslash (line splicing), must not
+// inject or swallow source. The hostile module must still compile and hold no injected line.
+TEST(GlslEmitter, SceneNamesCannotInjectSource) {
+    const std::string evil = "x\n#error injected\nvoid injected() {}\n// \\";
+    nlohmann::json material = {{"nodes", {{evil, {{"type", "bsdf.ggx"}, {"inputs", {{"roughness", 0.3}}}}},
+                                          {"tail\\", {{"type", "bsdf.diffuse"}}},
+                                          {"sum", {{"type", "closure.add"}, {"inputs", {{"a", "@" + evil + ".bsdf"}, {"b", "@tail\\.bsdf"}}}}}}},
+                               {"output", "@sum.bsdf"}};
+    GraphDesc g = parseGraph(material, "/materials/" + specula::pointerEscape(evil));
+    codegen::GlslOptions opt;
+    opt.materialName = evil;
+    codegen::GlslModule m = codegen::emitGlsl(g, opt);
+    EXPECT_EQ(m.source.find("\n#error injected"), std::string::npos);
+    EXPECT_EQ(m.source.find("\nvoid injected"), std::string::npos);
+    for (size_t at = m.source.find("//"); at != std::string::npos; at = m.source.find("//", at + 2)) {
+        size_t eol = m.source.find('\n', at);
+        ASSERT_NE(eol, std::string::npos);
+        EXPECT_NE(m.source[eol - 1], '\\') << m.source.substr(at, eol - at);
+    }
+    std::string src = m.source +
+                      "layout(location = 0) out vec4 spc_out;\n"
+                      "void main() {\n"
+                      "    SpeculaShadingInputs s = specula_shading_inputs(gl_FragCoord.xyz, vec3(0, 0, 1), vec3(0, 0, 1),\n"
+                      "                                                    vec4(1, 0, 0, 1), gl_FragCoord.xy / 64.0);\n"
+                      "    spc_out = vec4(specula_eval(s, vec3(0, 0, 1), vec3(0, 0, 1)), 1.0);\n"
+                      "}\n";
+    std::string log;
+    EXPECT_TRUE(glsltest::glslangCompile(src, &log)) << log << "\n" << src;
 }
