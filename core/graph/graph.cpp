@@ -18,6 +18,10 @@ namespace specula::graph {
 using nlohmann::json;
 
 int GraphDesc::findNode(const std::string& id) const {
+    // parseGraph keeps the nodes sorted by id (a JSON object's order): binary search, since a linear one made parsing
+    // quadratic (a 200k-node chain took 48 s). A hand-built, unsorted GraphDesc still finds its nodes linearly.
+    auto it = std::lower_bound(nodes.begin(), nodes.end(), id, [](const NodeInstance& n, const std::string& k) { return n.id < k; });
+    if (it != nodes.end() && it->id == id) return int(it - nodes.begin());
     for (size_t i = 0; i < nodes.size(); ++i)
         if (nodes[i].id == id) return int(i);
     return -1;
@@ -268,30 +272,39 @@ GraphDesc parseGraph(const json& mat, const std::string& pointer, const ParseOpt
         }
     }
 
-    // Pass 4: topological order + cycle detection (DFS in id order: deterministic).
+    // Pass 4: topological order + cycle detection (DFS in id order: deterministic). Iterative, with an explicit stack
+    // of (node, next input): a chain of ~29k nodes overflowed the call stack of the recursive form (issue 16).
     std::vector<int> state(g.nodes.size(), 0);  // 0 new, 1 on stack, 2 done
-    std::vector<int> path;
-    std::function<void(int)> visit = [&](int n) {
-        state[n] = 1;
-        path.push_back(n);
-        for (auto& in : g.nodes[n].inputs) {
+    std::vector<std::pair<int, size_t>> path;   // the DFS stack: node and the index of its next input to visit
+    for (size_t root = 0; root < g.nodes.size(); ++root) {
+        if (state[root] != 0) continue;
+        state[root] = 1;
+        path.push_back({int(root), 0});
+        while (!path.empty()) {
+            auto& [n, next] = path.back();
+            const std::vector<InputValue>& inputs = g.nodes[n].inputs;
+            if (next == inputs.size()) {
+                state[n] = 2;
+                g.order.push_back(n);
+                path.pop_back();
+                continue;
+            }
+            const InputValue& in = inputs[next++];
             if (in.kind != InputValue::Kind::Connection) continue;
             if (state[in.srcNode] == 1) {
                 std::string cyc;
-                auto it = std::find(path.begin(), path.end(), in.srcNode);
-                for (; it != path.end(); ++it) cyc += g.nodes[*it].id + " -> ";
+                auto it = std::find_if(path.begin(), path.end(), [&](const auto& e) { return e.first == in.srcNode; });
+                for (; it != path.end(); ++it) cyc += g.nodes[it->first].id + " -> ";
                 cyc += g.nodes[in.srcNode].id;
                 throw InputError(in.pointer, "cycle in the node graph: " + cyc + " (a graph must be acyclic; remove this connection)",
                                  "");
             }
-            if (state[in.srcNode] == 0) visit(in.srcNode);
+            if (state[in.srcNode] == 0) {
+                state[in.srcNode] = 1;
+                path.push_back({in.srcNode, 0});  // invalidates n/next: the loop re-reads path.back()
+            }
         }
-        path.pop_back();
-        state[n] = 2;
-        g.order.push_back(n);
-    };
-    for (size_t i = 0; i < g.nodes.size(); ++i)
-        if (state[i] == 0) visit(int(i));
+    }
 
     // Output.
     if (!mat.contains("output"))

@@ -166,3 +166,37 @@ TEST(GraphErrors, GraphsBeyondTheRegisterFileAreRefused) {
     EXPECT_EQ(e.pointer(), "/materials/steel");
     EXPECT_NE(std::string(e.what()).find("more than 65535 registers"), std::string::npos) << e.what();
 }
+
+// A long chain of nodes (here 30,000 multiplications by 1 feeding a roughness) is ordered without recursion: the
+// recursive depth-first search overflowed the call stack at about 29k chained nodes (issue 16). The chain folds to
+// the constant it started from; a cycle through the whole chain is still reported.
+TEST(GraphErrors, LongChainsAreOrderedWithoutRecursion) {
+    auto chain = [](int links) {
+        json nodes = json::object();
+        nodes["c0"] = {{"type", "math.mul.float"}, {"inputs", {{"a", 0.3}, {"b", 1.0}}}};
+        for (int i = 1; i < links; ++i)
+            nodes["c" + std::to_string(i)] = {{"type", "math.mul.float"},
+                                              {"inputs", {{"a", "@c" + std::to_string(i - 1) + ".out"}, {"b", 1.0}}}};
+        nodes["s"] = {{"type", "bsdf.ggx"}, {"inputs", {{"roughness", "@c" + std::to_string(links - 1) + ".out"}}}};
+        return json{{"nodes", nodes}, {"output", "@s.bsdf"}};
+    };
+    // 200,000 links: far past any stack; the graph is ordered (and then refused for its registers, not crashed).
+    EXPECT_EQ(graph::parseGraph(chain(200000), "/materials/chain").order.size(), 200001u);
+    const int kChain = 30000;
+    json m = chain(kChain);
+    graph::GraphDesc g = graph::parseGraph(m, "/materials/chain");
+    EXPECT_EQ(g.order.size(), size_t(kChain + 1));
+    EXPECT_EQ(g.order.front(), g.findNode("c0"));
+    EXPECT_EQ(g.order.back(), g.findNode("s"));
+    graph::Program p = graph::Program::compile(g, {{g.outputNode, g.outputPort}}, nullptr);
+    EXPECT_EQ(p.foldedCount(), size_t(kChain));
+    EXPECT_EQ(p.instructionCount(), 1u);
+    // Close the chain into a cycle: c0 reads the last link.
+    m["nodes"]["c0"]["inputs"]["a"] = "@c" + std::to_string(kChain - 1) + ".out";
+    try {
+        graph::parseGraph(m, "/materials/chain");
+        FAIL() << "cycle not found";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("cycle in the node graph"), std::string::npos);
+    }
+}
