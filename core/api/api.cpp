@@ -339,10 +339,12 @@ RenderJob Scene::renderAsync(const RenderOptions& opts, TileCallback onTile) con
         RenderJob::Impl* j = job.impl_.get();
         const specula::Scene* scene = &impl_->scene;
         int threads = opts.threads;
-        j->worker = std::thread([j, scene, threads, cb = std::move(onTile)] {
+        uint64_t maxMemory = opts.maxMemoryBytes;
+        j->worker = std::thread([j, scene, threads, maxMemory, cb = std::move(onTile)] {
             try {
                 specula::RenderOptions ro;
                 ro.threads = threads;
+                ro.maxMemoryBytes = maxMemory;
                 ro.cancel = &j->cancel;
                 if (cb)
                     ro.onTile = [&](const RenderProgress& p) {
@@ -352,6 +354,8 @@ RenderJob Scene::renderAsync(const RenderOptions& opts, TileCallback onTile) con
                 j->result.impl_->images = std::move(out.images);
                 j->result.impl_->internalStats = out.stats;
                 j->result.impl_->stats = statsOf(out.stats);
+            } catch (const Error&) {  // keeps its code and pointer (e.g. the memory estimate's "/render")
+                j->error = std::current_exception();
             } catch (const std::exception& e) {
                 try {
                     throw Error(ErrorCode::BadInput, "", e.what());

@@ -2,6 +2,8 @@
 // are drawn from the pixel filter, so every sample has weight 1 and no splatting crosses tiles);
 // hence the image does not depend on the number of threads or the tile completion order.
 #include "core/render/renderer.h"
+#include "core/util/error.h"
+#include "core/util/memory_budget.h"
 
 #include "core/render/accel.h"
 #include "core/render/camera.h"
@@ -54,6 +56,19 @@ RenderOutput renderScene(const Scene& scene, const RenderOptions& options) {
     CropWindow crop{0, 0, rs.width, rs.height};
     if (rs.crop) crop = *rs.crop;
     const int W = crop.x1 - crop.x0, H = crop.y1 - crop.y0;
+
+    // Refuse a render that cannot fit before allocating its film (8192x8192 under a 4 GB limit ended in an uncaught
+    // std::bad_alloc, issue 16).
+    uint64_t triangles = 0;
+    for (const auto& sh : scene.shapes) triangles += sh.mesh.indices.size();
+    const uint64_t needed = uint64_t(W) * uint64_t(H) * kRenderBytesPerPixel + triangles * kBvhBytesPerTriangle;
+    const MemoryBudget budget = memoryBudget(options.maxMemoryBytes);
+    if (needed > budget.availableBytes)
+        throw InputError("/render", "a " + std::to_string(W) + "x" + std::to_string(H) + " image" +
+                                        (triangles ? " of " + std::to_string(triangles) + " triangles" : std::string()) +
+                                        " needs about " + formatBytes(needed) + " to render and write, but " +
+                                        formatBytes(budget.availableBytes) + " are left under " + budget.limitedBy +
+                                        "; lower the resolution, render it in --crop pieces, or raise the limit");
 
     RenderOutput out;
     ImageSet& img = out.images;

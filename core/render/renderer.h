@@ -37,7 +37,16 @@ struct RenderOptions {
     std::function<void(const RenderProgress&)> onTile;  // called serially (under a mutex, from a worker
                                                         // thread), after each finished tile
     const std::atomic<bool>* cancel = nullptr;          // polled between pixel rows
+    // Bytes the render may use in all (0: no limit of its own). Whatever the value, a render whose estimate
+    // (kRenderBytesPerPixel per pixel, kBvhBytesPerTriangle per triangle) exceeds the memory this process can still get
+    // (core/util/memory_budget.h) is refused before anything is allocated.
+    uint64_t maxMemoryBytes = 0;
 };
+
+// The memory estimate of renderScene: the film's 19 floats per pixel, and a copy of them while the EXR and PNG are
+// written (with the PNG's tone-mapped buffers), rounded up; Embree's BVH per triangle (measured: docs/performance.md).
+constexpr uint64_t kRenderBytesPerPixel = 256;
+constexpr uint64_t kBvhBytesPerTriangle = 64;
 
 struct RenderOutput {
     ImageSet images;  // beauty, diffuse, specular, albedo, normal, uv, depth

@@ -71,6 +71,9 @@ struct LoadOptions {
 
 struct RenderOptions {
     int threads = 0;  // 0: all cores. The image does not depend on it.
+    // Refuse (Error, bad_input, pointer "/render") a render estimated to need more bytes than this, or than the
+    // process can still get (address-space and cgroup limits, available memory); 0: only the system's limits.
+    uint64_t maxMemoryBytes = 0;
 };
 
 struct RenderStats {

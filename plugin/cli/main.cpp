@@ -1,6 +1,7 @@
 // The `specula` command-line tool: render JSON scenes, compare images, validate scenes. A thin layer
 // over the library API (core/api/specula.h); exit codes are documented in docs/cli.md.
 #include "core/api/specula.h"
+#include "core/util/memory_budget.h"
 #include "plugin/cli/cli_output.h"
 #include "plugin/cli/graph_commands.h"
 #include "plugin/cli/normalmap_command.h"
@@ -85,6 +86,9 @@ int main(int argc, char** argv) {
     render->add_option("-o,--output", outPath, "Output EXR (default: <scene name>.exr in the current folder)");
     render->add_option("--spp", spp, "Samples per pixel (overrides the scene)")->check(CLI::Range(1, 1 << 20));
     render->add_option("--threads", threads, "Worker threads (default: all cores)")->check(CLI::Range(0, 1024));
+    std::string maxMemory;
+    render->add_option("--max-memory", maxMemory,
+                       "Refuse a render estimated to need more than SIZE bytes (4G, 512M; default: what the system allows)");
     render->add_option("--seed", seed, "Sampler seed (overrides the scene)")->check(CLI::Range(int64_t(0), int64_t(2147483647)));
     render->add_option("--resolution", resolution, "Image size WxH (overrides the scene)");
     render->add_option("--crop", crop, "Render only pixels x0,y0,x1,y1 (x1,y1 exclusive); output is the crop");
@@ -152,9 +156,26 @@ int main(int argc, char** argv) {
         RenderOptions opts;
         opts.threads = threads;
         opts.cancel = &gCancel;
+        if (!maxMemory.empty() && !parseByteSize(maxMemory, opts.maxMemoryBytes)) {
+            std::fprintf(stderr, "specula: error: --max-memory expects a size such as 4G, 512M or 1000000000, got '%s'\n",
+                         maxMemory.c_str());
+            exitCode = kExitUsage;
+            return;
+        }
         if (mode == "bar") opts.onTile = printBar;
         if (mode == "json") opts.onTile = printJsonTile;
-        RenderOutput result = renderScene(scene, opts);
+        RenderOutput result;
+        try {
+            result = renderScene(scene, opts);
+        } catch (const std::bad_alloc&) {
+            std::fprintf(stderr, "specula: error: out of memory while rendering '%s' (try --crop pieces or a lower "
+                                 "--resolution)\n", scenePath.c_str());
+            exitCode = kExitBadInput;
+            return;
+        } catch (const std::exception& e) {
+            exitCode = reportError(e, exitCodeFor(e));
+            return;
+        }
         if (mode == "bar") std::fprintf(stderr, "\n");
         const RenderStats& st = result.stats;
         try {

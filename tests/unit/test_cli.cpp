@@ -432,3 +432,32 @@ TEST(Cli, NoCommandClobbersAnOutputPairOrItsOwnInput) {
     EXPECT_EQ(test::runCli("glsl " + q(dir + "/s.json") + " --material m -o " + q(dir + "/s.json"), &out), 2) << out;
     EXPECT_EQ(test::readFile(dir + "/s.json"), scene);
 }
+
+// Issue 16: a render too large for the memory this process may use is refused before anything is allocated (8192x8192
+// under a 4 GB address-space limit ended in an uncaught std::bad_alloc, exit 134): exit 1, /render named, no file.
+TEST(Cli, RendersBeyondTheMemoryLimitAreRefusedBeforeAllocating) {
+    std::string dir = test::tempDir("cli");
+    test::writeFile(dir + "/s.json", kSmallScene);
+    std::string out;
+    const std::string big = "render " + q(dir + "/s.json") + " --resolution 8192x8192 --spp 1 -o " + q(dir + "/big.exr");
+    EXPECT_EQ(test::runCli(big + " --max-memory 4G", &out), 1) << out;
+    EXPECT_NE(out.find("/render: a 8192x8192 image"), std::string::npos) << out;
+    EXPECT_NE(out.find("needs about 16.0 GiB"), std::string::npos) << out;
+    EXPECT_NE(out.find("--max-memory of 4.0 GiB"), std::string::npos) << out;
+    // The same under ulimit -v (the process's own limit, found without an option).
+    FILE* pipe = popen(("ulimit -v 4000000; \"" SPECULA_CLI "\" " + big + " 2>&1").c_str(), "r");
+    ASSERT_NE(pipe, nullptr);
+    std::string limited;
+    char buf[512];
+    while (size_t n = fread(buf, 1, sizeof buf, pipe)) limited.append(buf, n);
+    int status = pclose(pipe);
+    ASSERT_TRUE(WIFEXITED(status)) << limited;
+    EXPECT_EQ(WEXITSTATUS(status), 1) << limited;
+    EXPECT_NE(limited.find("address-space limit (ulimit -v)"), std::string::npos) << limited;
+    EXPECT_FALSE(fs::exists(dir + "/big.exr"));
+    EXPECT_FALSE(fs::exists(dir + "/big.png"));
+    // A malformed size is a usage error; a small render fits a small limit.
+    EXPECT_EQ(test::runCli(big + " --max-memory 4x", &out), 2) << out;
+    EXPECT_EQ(test::runCli("render " + q(dir + "/s.json") + " --max-memory 512M --progress none -o " + q(dir + "/ok.exr"), &out), 0)
+        << out;
+}
