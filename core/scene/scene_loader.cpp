@@ -322,6 +322,8 @@ void readLight(const Json& j, const std::string& ptr, Context& ctx) {
             TextureHandle h;
             try {
                 h = s.textures->load(file, cs);
+            } catch (const TextureLimitError& e) {
+                throw InputError(r.pointer("file"), e.what());
             } catch (const TextureError& e) {
                 throw IoError(r.pointer("file") + ": " + e.what());
             }

@@ -1,6 +1,7 @@
 // TextureStore: reads images with OpenImageIO, converts them once to the linear working space, caches a
 // MIP-mapped float .tx per (content, colorspace) and samples it through a shared OIIO TextureSystem.
 #include "core/texture/texture_store.h"
+#include "core/util/memory_budget.h"
 
 #include "core/color/color_config.h"
 #include "core/io/image_io.h"
@@ -147,6 +148,40 @@ TextureStore::TextureStore(std::shared_ptr<const ColorConfig> color) : impl_(std
 
 TextureStore::~TextureStore() = default;
 
+namespace {
+
+// A texture is read as floats, converted and MIP-mapped: kMaxTextureTexels per side and kMaxTextureBytes of float
+// pixels bound what a header can make us allocate (docs/scene-format.md, issue 16).
+constexpr int kMaxTextureSide = 65536;
+constexpr uint64_t kMaxTextureBytes = uint64_t(4) << 30;
+constexpr uint64_t kMaxTextureFileBytes = uint64_t(4) << 30;
+
+void checkTextureFileSize(const std::string& path) {
+    std::error_code ec;
+    const uint64_t size = fs::file_size(path, ec);
+    if (!ec && size > kMaxTextureFileBytes)
+        throw TextureLimitError("texture '" + path + "' is " + formatBytes(size) + "; textures are limited to " +
+                           formatBytes(kMaxTextureFileBytes));
+}
+
+void checkTextureDimensions(const std::string& path, const OIIO::ImageSpec& spec) {
+    const uint64_t w = uint64_t(std::max(spec.width, 0)), h = uint64_t(std::max(spec.height, 0));
+    const uint64_t c = uint64_t(std::max(spec.nchannels, 0)), d = uint64_t(std::max(spec.depth, 1));
+    const uint64_t bytes = w * h * d * c * sizeof(float);  // each factor < 2^31: no overflow for depth 1
+    const std::string claim = std::to_string(w) + "x" + std::to_string(h) + " pixels, " + std::to_string(c) + " channels";
+    if (w > uint64_t(kMaxTextureSide) || h > uint64_t(kMaxTextureSide) || c > 64 || d > 1 || bytes > kMaxTextureBytes)
+        throw TextureLimitError("texture '" + path + "': its header claims " + claim + " (" + formatBytes(bytes) +
+                           " as floats); textures are limited to " + std::to_string(kMaxTextureSide) + " pixels a side, " +
+                           "64 channels and " + formatBytes(kMaxTextureBytes) + " of float pixels");
+    // Read, colour conversion and MIP chain hold about three float copies at once.
+    const MemoryBudget budget = memoryBudget();
+    if (3 * bytes > budget.availableBytes)
+        throw TextureLimitError("texture '" + path + "' (" + claim + ") needs about " + formatBytes(3 * bytes) + " to load, but " +
+                           formatBytes(budget.availableBytes) + " are left under " + budget.limitedBy);
+}
+
+}  // namespace
+
 TextureHandle TextureStore::load(const std::string& path, const std::string& colorspace) {
     auto& I = *impl_;
     std::error_code ec;
@@ -192,6 +227,7 @@ TextureHandle TextureStore::load(const std::string& path, const std::string& col
         src.set_pixels(OIIO::ROI(0, map.size, 0, map.size, 0, 1, 0, 3), OIIO::TypeDesc::FLOAT, px.data());
         if (autoSpace) declared = "raw";
     } else {
+        checkTextureFileSize(path);
         {
             std::ifstream f(path, std::ios::binary);
             std::ostringstream ss;
@@ -202,6 +238,9 @@ TextureHandle TextureStore::load(const std::string& path, const std::string& col
         OIIO::ImageSpec readConfig;
         readConfig.attribute("oiio:UnassociatedAlpha", 1);  // keep straight alpha: colour is converted unpremultiplied
         src.reset(path, 0, 0, nullptr, &readConfig);
+        if (!src.init_spec(path, 0, 0))
+            throw TextureError("cannot read texture '" + path + "': " + src.geterror());
+        checkTextureDimensions(path, src.spec());  // before the pixels: a 300 KB file may claim 100000x100000
         if (!src.read(0, 0, true, OIIO::TypeDesc::FLOAT))
             throw TextureError("cannot read texture '" + path + "': " + src.geterror());
     }

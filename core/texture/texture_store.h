@@ -17,6 +17,10 @@ class ColorConfig;
 struct TextureError : std::runtime_error {
     using std::runtime_error::runtime_error;
 };
+// A texture beyond the documented limits (its header's size, the file's size, the memory left): bad input, not I/O.
+struct TextureLimitError : TextureError {
+    using TextureError::TextureError;
+};
 
 enum class TextureWrap { Repeat, Clamp, Mirror, Black };
 

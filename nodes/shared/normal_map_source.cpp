@@ -30,6 +30,14 @@ std::string resolveTexturePath(const graph::PrepareContext& pc, const std::strin
     return p.is_relative() ? (std::filesystem::path(pc.load->baseDir) / p).string() : file;
 }
 
+Error textureLoadError(const std::string& pointer, const std::string& path, const std::string& message,
+                       const std::exception& cause) {
+    std::error_code ec;
+    const bool exists = !isGeneratedNormalMapName(path) && std::filesystem::exists(path, ec);
+    const bool limit = dynamic_cast<const TextureLimitError*>(&cause) != nullptr;
+    return Error(exists && !limit ? ErrorCode::Io : ErrorCode::BadInput, pointer, message);
+}
+
 NormalMapSource loadNormalMapSource(const graph::PrepareContext& pc, const std::string& port, const char* node,
                                     bool directx, const NormalMapChecks& checks) {
     const std::string& file = pc.str(port);
@@ -53,7 +61,7 @@ NormalMapSource loadNormalMapSource(const graph::PrepareContext& pc, const std::
     } catch (const InputError&) {
         throw;
     } catch (const std::exception& e) {
-        throw InputError(pointer, what + ": cannot load: " + e.what());
+        throw textureLoadError(pointer, resolveTexturePath(pc, file), what + ": cannot load: " + e.what(), e);
     }
     if (src.channels < 2 || src.channels > 4)
         throw InputError(pointer, what + " has " + std::to_string(src.channels) +

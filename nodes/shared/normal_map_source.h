@@ -2,6 +2,8 @@
 // map named 'generate:<kind>:<size>:<seed>' (core/texture/normal_map_gen.h), decoded and checked once at prepare.
 #pragma once
 
+#include "core/util/error.h"
+
 #include "core/graph/node_spec.h"
 #include "core/math/math.h"
 
@@ -23,6 +25,12 @@ struct NormalMapSource {
 // A texture input's path as the texture store should open it: relative paths against the scene file's folder;
 // absolute paths and generated maps ('generate:<kind>:<size>:<seed>', core/texture/normal_map_gen.h) unchanged.
 std::string resolveTexturePath(const graph::PrepareContext& pc, const std::string& file);
+
+// The error of a texture that did not load (cause), at the JSON pointer 'pointer': a missing file or one beyond the
+// limits (TextureLimitError) is bad input (exit 1), a file that exists but cannot be read or decoded is an I/O error
+// (exit 3, docs/cli.md), as for meshes.
+Error textureLoadError(const std::string& pointer, const std::string& path, const std::string& message,
+                       const std::exception& cause);
 
 struct NormalMapChecks {
     // Reject maps whose decoded vectors are not unit length (a colour image or a height map given by mistake): more

@@ -461,3 +461,30 @@ TEST(Cli, RendersBeyondTheMemoryLimitAreRefusedBeforeAllocating) {
     EXPECT_EQ(test::runCli("render " + q(dir + "/s.json") + " --max-memory 512M --progress none -o " + q(dir + "/ok.exr"), &out), 0)
         << out;
 }
+
+// Issue 16: a texture's header is checked before its pixels are allocated (a 300 KB PNG claiming 100000x100000 made
+// OpenImageIO try 120 GB): exit 1 naming the file's pointer; a texture that exists but does not decode is an I/O
+// error (exit 3, as docs/cli.md says), a missing one bad input (exit 1).
+TEST(Cli, TextureHeadersAreCheckedAndTextureFailuresGetTheDocumentedCodes) {
+    std::string dir = test::tempDir("cli");
+    auto sceneWith = [&](const std::string& file) {
+        std::string s = kSmallScene;
+        const std::string diffuse = R"("g": {"nodes": {"d": {"type": "bsdf.diffuse"}}, "output": "@d.bsdf"})";
+        s.replace(s.find(diffuse), diffuse.size(),
+                  R"("g": {"nodes": {"t": {"type": "texture.image", "inputs": {"file": ")" + file +
+                      R"(", "colorspace": "sRGB - Texture"}}, "d": {"type": "bsdf.diffuse", "inputs": {"color": "@t.color"}}}, "output": "@d.bsdf"})");
+        test::writeFile(dir + "/scene.json", s);
+        return "render " + q(dir + "/scene.json") + " --progress none -o " + q(dir + "/out.exr");
+    };
+    std::string out;
+    test::writeFile(dir + "/huge.ppm", "P6\n100000 100000\n255\n" + std::string(300000, '\x7f'));
+    EXPECT_EQ(test::runCli(sceneWith("huge.ppm"), &out), 1) << out;
+    EXPECT_NE(out.find("/materials/g/nodes/t/inputs/file"), std::string::npos) << out;
+    EXPECT_NE(out.find("header claims 100000x100000 pixels"), std::string::npos) << out;
+    test::writeFile(dir + "/broken.png", "\x89PNG\r\n\x1a\n this is not a PNG");
+    EXPECT_EQ(test::runCli(sceneWith("broken.png"), &out), 3) << out;
+    EXPECT_NE(out.find("broken.png"), std::string::npos) << out;
+    EXPECT_EQ(test::runCli(sceneWith("missing.png"), &out), 1) << out;
+    EXPECT_NE(out.find("missing.png"), std::string::npos) << out;
+    EXPECT_FALSE(fs::exists(dir + "/out.exr"));
+}
