@@ -200,7 +200,9 @@ GLuint uniformBlock(const json& block, const std::vector<std::pair<std::string, 
         std::memcpy(&bytes[off], v.data(), 4 * width);
     };
     for (const json& m : block.at("members")) put(m, m.at("value").get<std::vector<float>>());
-    for (const auto& [name, v] : overrides) {
+    for (const auto& entry : overrides) {
+        const std::string& name = entry.first;  // a named reference: C++17 lambdas cannot capture structured bindings
+        const std::vector<float>& v = entry.second;
         auto it = std::find_if(block.at("members").begin(), block.at("members").end(),
                                [&](const json& m) { return m.at("name") == name; });
         if (it == block.at("members").end()) fail("the uniform block has no member '" + name + "'");
