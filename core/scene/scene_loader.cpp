@@ -322,7 +322,7 @@ void readLight(const Json& j, const std::string& ptr, Context& ctx) {
             TextureHandle h;
             try {
                 h = s.textures->load(file, cs);
-            } catch (const TextureLimitError& e) {
+            } catch (const TextureInputError& e) {
                 throw InputError(r.pointer("file"), e.what());
             } catch (const TextureError& e) {
                 throw IoError(r.pointer("file") + ": " + e.what());

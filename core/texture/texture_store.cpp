@@ -160,7 +160,7 @@ void checkTextureFileSize(const std::string& path) {
     std::error_code ec;
     const uint64_t size = fs::file_size(path, ec);
     if (!ec && size > kMaxTextureFileBytes)
-        throw TextureLimitError("texture '" + path + "' is " + formatBytes(size) + "; textures are limited to " +
+        throw TextureInputError("texture '" + path + "' is " + formatBytes(size) + "; textures are limited to " +
                            formatBytes(kMaxTextureFileBytes));
 }
 
@@ -170,13 +170,13 @@ void checkTextureDimensions(const std::string& path, const OIIO::ImageSpec& spec
     const uint64_t bytes = w * h * d * c * sizeof(float);  // each factor < 2^31: no overflow for depth 1
     const std::string claim = std::to_string(w) + "x" + std::to_string(h) + " pixels, " + std::to_string(c) + " channels";
     if (w > uint64_t(kMaxTextureSide) || h > uint64_t(kMaxTextureSide) || c > 64 || d > 1 || bytes > kMaxTextureBytes)
-        throw TextureLimitError("texture '" + path + "': its header claims " + claim + " (" + formatBytes(bytes) +
+        throw TextureInputError("texture '" + path + "': its header claims " + claim + " (" + formatBytes(bytes) +
                            " as floats); textures are limited to " + std::to_string(kMaxTextureSide) + " pixels a side, " +
                            "64 channels and " + formatBytes(kMaxTextureBytes) + " of float pixels");
     // Read, colour conversion and MIP chain hold about three float copies at once.
     const MemoryBudget budget = memoryBudget();
     if (3 * bytes > budget.availableBytes)
-        throw TextureLimitError("texture '" + path + "' (" + claim + ") needs about " + formatBytes(3 * bytes) + " to load, but " +
+        throw TextureInputError("texture '" + path + "' (" + claim + ") needs about " + formatBytes(3 * bytes) + " to load, but " +
                            formatBytes(budget.availableBytes) + " are left under " + budget.limitedBy);
 }
 
@@ -197,7 +197,7 @@ TextureHandle TextureStore::load(const std::string& path, const std::string& col
         try {
             declared = I.color->canonicalColorspace(colorspace);
         } catch (const ColorError& e) {
-            throw TextureError("texture '" + path + "': " + e.what());
+            throw TextureInputError("texture '" + path + "': " + e.what());
         }
     }
     const auto key = std::make_pair(absPath, autoSpace ? std::string("auto") : declared);

@@ -17,8 +17,9 @@ class ColorConfig;
 struct TextureError : std::runtime_error {
     using std::runtime_error::runtime_error;
 };
-// A texture beyond the documented limits (its header's size, the file's size, the memory left): bad input, not I/O.
-struct TextureLimitError : TextureError {
+// A texture the scene asks for wrongly (beyond the documented limits of size, file size and memory; an unknown colour
+// space): bad input, not I/O.
+struct TextureInputError : TextureError {
     using TextureError::TextureError;
 };
 

@@ -34,7 +34,7 @@ Error textureLoadError(const std::string& pointer, const std::string& path, cons
                        const std::exception& cause) {
     std::error_code ec;
     const bool exists = !isGeneratedNormalMapName(path) && std::filesystem::exists(path, ec);
-    const bool limit = dynamic_cast<const TextureLimitError*>(&cause) != nullptr;
+    const bool limit = dynamic_cast<const TextureInputError*>(&cause) != nullptr;
     return Error(exists && !limit ? ErrorCode::Io : ErrorCode::BadInput, pointer, message);
 }
 

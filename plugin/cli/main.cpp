@@ -1,6 +1,7 @@
 // The `specula` command-line tool: render JSON scenes, compare images, validate scenes. A thin layer
 // over the library API (core/api/specula.h); exit codes are documented in docs/cli.md.
 #include "core/api/specula.h"
+#include "core/util/error.h"
 #include "core/util/memory_budget.h"
 #include "plugin/cli/cli_output.h"
 #include "plugin/cli/graph_commands.h"
@@ -10,6 +11,7 @@
 #include "plugin/cli/validation_cli.h"
 #include "plugin/cli/view_command.h"
 
+#include <algorithm>
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
@@ -265,6 +267,18 @@ int main(int argc, char** argv) {
     addViewCommand(app, exitCode);
     addNodesCommand(app, exitCode);
 
+    // A first word that is neither an option nor a command: name it and the nearest command (CLI11 only says "A
+    // subcommand is required").
+    if (argc > 1 && argv[1][0] != '-') {
+        std::vector<std::string> names;
+        for (const CLI::App* sub : app.get_subcommands([](const CLI::App*) { return true; })) names.push_back(sub->get_name());
+        if (std::find(names.begin(), names.end(), argv[1]) == names.end()) {
+            const std::string near = nearestName(argv[1], names);
+            std::fprintf(stderr, "specula: error: unknown command '%s'%s; see specula --help\n", argv[1],
+                         near.empty() ? "" : (" (did you mean '" + near + "'?)").c_str());
+            return kExitUsage;
+        }
+    }
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
