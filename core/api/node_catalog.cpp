@@ -22,8 +22,11 @@ std::string shortestFloatText(float v) {
         if (std::strtof(buf, nullptr) == v) {
             // %g switches to an exponent once the exponent reaches the precision ("1e+01"): widen it for
             // magnitudes below 1e7 so integers read naturally ("10").
-            int e = int(std::floor(std::log10(std::fabs(double(v)))));
-            if (v != 0.f && e >= prec && e < 7) std::snprintf(buf, sizeof buf, "%.*g", e + 1, double(v));
+            // (log10(0) is -inf, whose conversion to int is undefined: zero is handled first.)
+            if (v != 0.f) {
+                const int e = int(std::floor(std::log10(std::fabs(double(v)))));
+                if (e >= prec && e < 7) std::snprintf(buf, sizeof buf, "%.*g", e + 1, double(v));
+            }
             break;
         }
     }

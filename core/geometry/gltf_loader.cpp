@@ -347,8 +347,14 @@ TriangleMesh loadGltfMesh(const std::string& path, bool binary) {
     loader.SetFsCallbacks({&bufferExists, &expandNothing, &readBuffer, nullptr, &access});
     tinygltf::Model model;
     std::string err, warn;
-    bool ok = binary ? loader.LoadBinaryFromFile(&model, &err, &warn, path)
-                     : loader.LoadASCIIFromFile(&model, &err, &warn, path);
+    bool ok = false;
+    try {
+        ok = binary ? loader.LoadBinaryFromFile(&model, &err, &warn, path)
+                    : loader.LoadASCIIFromFile(&model, &err, &warn, path);
+    } catch (const std::exception& e) {
+        // tinygltf indexes some GLB headers with vector::at (found by fuzz_mesh): a parse error like any other.
+        throwMeshError(path, std::string("glTF parse error: ") + e.what());
+    }
     if (!ok && !access.refused.empty())
         throwMeshError(path, "a buffer URI leads outside the glTF file's folder; buffers are read only from that folder "
                              "and from the folders listed in SPECULA_RESOURCE_PATH (docs/scene-format.md)");

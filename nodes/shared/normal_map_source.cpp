@@ -30,12 +30,12 @@ std::string resolveTexturePath(const graph::PrepareContext& pc, const std::strin
     return p.is_relative() ? (std::filesystem::path(pc.load->baseDir) / p).string() : file;
 }
 
-Error textureLoadError(const std::string& pointer, const std::string& path, const std::string& message,
-                       const std::exception& cause) {
+void throwTextureLoadError(const std::string& pointer, const std::string& path, const std::string& message,
+                           const std::exception& cause) {
     std::error_code ec;
     const bool exists = !isGeneratedNormalMapName(path) && std::filesystem::exists(path, ec);
-    const bool limit = dynamic_cast<const TextureInputError*>(&cause) != nullptr;
-    return Error(exists && !limit ? ErrorCode::Io : ErrorCode::BadInput, pointer, message);
+    if (!exists || dynamic_cast<const TextureInputError*>(&cause)) throw InputError(pointer, message);
+    throw Error(ErrorCode::Io, pointer, message);
 }
 
 NormalMapSource loadNormalMapSource(const graph::PrepareContext& pc, const std::string& port, const char* node,
@@ -61,7 +61,7 @@ NormalMapSource loadNormalMapSource(const graph::PrepareContext& pc, const std::
     } catch (const InputError&) {
         throw;
     } catch (const std::exception& e) {
-        throw textureLoadError(pointer, resolveTexturePath(pc, file), what + ": cannot load: " + e.what(), e);
+        throwTextureLoadError(pointer, resolveTexturePath(pc, file), what + ": cannot load: " + e.what(), e);
     }
     if (src.channels < 2 || src.channels > 4)
         throw InputError(pointer, what + " has " + std::to_string(src.channels) +

@@ -27,10 +27,10 @@ struct NormalMapSource {
 std::string resolveTexturePath(const graph::PrepareContext& pc, const std::string& file);
 
 // The error of a texture that did not load (cause), at the JSON pointer 'pointer': a missing file or one beyond the
-// limits (TextureInputError) is bad input (exit 1), a file that exists but cannot be read or decoded is an I/O error
+// limits (TextureInputError) is an InputError (exit 1), a file that exists but cannot be read or decoded is an I/O error
 // (exit 3, docs/cli.md), as for meshes.
-Error textureLoadError(const std::string& pointer, const std::string& path, const std::string& message,
-                       const std::exception& cause);
+[[noreturn]] void throwTextureLoadError(const std::string& pointer, const std::string& path, const std::string& message,
+                                        const std::exception& cause);
 
 struct NormalMapChecks {
     // Reject maps whose decoded vectors are not unit length (a colour image or a height map given by mistake): more

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <typeinfo>
 
 #include <cmath>
 #include <cstdio>
@@ -804,6 +805,26 @@ TEST_F(LoaderTest, GltfBuffersStayInsideAllowedFoldersAndAccessorsCannotOverflow
     ASSERT_NE(view, std::string::npos);
     huge.insert(view, "\"byteStride\":128,");
     expectLoadError(write("inside/huge.gltf", huge), "accessor exceeds its buffer");
+}
+
+// fuzz_mesh found a GLB that made tinygltf throw std::out_of_range (vector::at on its header): every prefix of a valid
+// GLB and of a valid glTF must load or fail with MeshLoadError, never another exception.
+TEST_F(LoaderTest, TruncatedGltfFilesFailWithAMeshError) {
+    for (bool binary : {true, false}) {
+        const std::string full = gltfSingleMesh(quadFixture(), false, binary);
+        int failures = 0;
+        for (size_t n = 0; n < full.size(); n += (n < 64 ? 1 : 7)) {
+            const std::string path = write(binary ? "cut.glb" : "cut.gltf", full.substr(0, n));
+            try {
+                loadMesh(path);
+            } catch (const MeshLoadError&) {
+                ++failures;
+            } catch (const std::exception& e) {
+                ADD_FAILURE() << (binary ? "GLB" : "glTF") << " cut at " << n << " bytes: " << typeid(e).name() << ": " << e.what();
+            }
+        }
+        EXPECT_GT(failures, 10);
+    }
 }
 
 TEST_F(LoaderTest, GltfUvAndTangentConvention) {

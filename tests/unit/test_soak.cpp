@@ -92,5 +92,11 @@ TEST(Soak, ThousandRandomScenesRenderWithFlatMemory) {
     ::testing::Test::RecordProperty("rss_first_mib", std::to_string(first));
     ::testing::Test::RecordProperty("rss_warm_mib", std::to_string(warm));
     ::testing::Test::RecordProperty("rss_last_mib", std::to_string(last));
+#ifdef SPECULA_SANITIZED
+    // ASan holds freed memory in its quarantine (256 MiB) and caches: resident memory says nothing there; LeakSanitizer
+    // checks for leaks when the process ends.
+    (void)first;
+#else
     EXPECT_LT(last - warm, 16.0) << "resident memory grew from " << warm << " MiB to " << last << " MiB over 900 renders";
+#endif
 }

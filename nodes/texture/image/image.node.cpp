@@ -77,7 +77,7 @@ std::shared_ptr<const void> prepare(const PrepareContext& pc) {
     try {
         d->handle = pc.load->textures->load(path, cs);
     } catch (const std::exception& e) {
-        throw textureLoadError(pc.pointer("file"), path, std::string("cannot load texture: ") + e.what(), e);
+        throwTextureLoadError(pc.pointer("file"), path, std::string("cannot load texture: ") + e.what(), e);
     }
     return d;
 }

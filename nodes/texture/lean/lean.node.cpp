@@ -86,7 +86,7 @@ std::shared_ptr<const void> prepare(const PrepareContext& pc) {
     } catch (const InputError&) {
         throw;
     } catch (const std::exception& e) {
-        throw textureLoadError(pc.pointer("file"), path, std::string("cannot load normal map: ") + e.what(), e);
+        throwTextureLoadError(pc.pointer("file"), path, std::string("cannot load normal map: ") + e.what(), e);
     }
     return d;
 }

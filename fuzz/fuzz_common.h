@@ -1,0 +1,24 @@
+// Shared pieces of the libFuzzer targets (fuzz/README in docs/reliability.md): a private scratch folder per process,
+// the one shading point every graph is run at, and the rule that only documented errors may leave a target.
+#pragma once
+
+#include "core/render/shading.h"
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+namespace specula::fuzz {
+
+// A folder of this process's own under $TMPDIR (made once, emptied by clearScratch), for files the loaders read.
+// Caches (glint dictionaries, P-NDFs, LTC prefilters) go to $SPECULA_CACHE_DIR, which fuzz/run.sh keeps in the build
+// folder so that seeds do not rebuild them at every run.
+const std::string& scratchDir();
+void clearScratch();
+// Writes bytes to scratchDir()/name and returns the path.
+std::string writeScratch(const std::string& name, const uint8_t* data, size_t size);
+
+// A shading point with differentials, as a camera ray at a unit sphere would give.
+ShadingPoint fuzzShadingPoint();
+
+}  // namespace specula::fuzz

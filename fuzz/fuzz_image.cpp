@@ -1,0 +1,38 @@
+// libFuzzer target: image files through the texture store (header limits, decode, colour conversion, MIP cache) and
+// through readImageSet (the EXR reader of compare and the validation tools). The first byte picks the format by
+// extension (PNG, EXR, PPM, HDR, TGA, TIFF, JPEG) and the colour space; the rest is the file. Only TextureError and
+// ImageIoError may leave; anything else or a crash is a finding.
+#include "core/color/color_config.h"
+#include "core/io/image_io.h"
+#include "core/texture/texture_store.h"
+#include "fuzz/fuzz_common.h"
+
+#include <cstdlib>
+
+using namespace specula;
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+    if (size < 1) return 0;
+    static const char* kExt[] = {"png", "exr", "ppm", "hdr", "tga", "tif", "jpg"};
+    // The MIP caches of the inputs go to the scratch folder (emptied every 256 inputs), not to the shared cache.
+    static const bool cacheSet = ::setenv("SPECULA_CACHE_DIR", (fuzz::scratchDir() + "/cache").c_str(), 1) == 0;
+    (void)cacheSet;
+    static int calls = 0;
+    if (++calls % 256 == 0) fuzz::clearScratch();  // MIP caches of earlier inputs
+    static const std::shared_ptr<const ColorConfig> color = ColorConfig::load("builtin");
+    TextureStore store(color);  // one per input: a store keeps every texture it loaded
+    // A fresh name per input: the process-wide texture system keeps what it opened by name.
+    const std::string path =
+        fuzz::writeScratch("image" + std::to_string(calls) + "." + kExt[data[0] % 7], data + 1, size - 1);
+    try {
+        TextureHandle h = store.load(path, (data[0] & 0x80) ? "sRGB - Texture" : "raw");
+        (void)store.pixels(h);
+    } catch (const TextureError&) {
+    }
+    try {
+        ImageSet set = readImageSet(path);
+        (void)set;
+    } catch (const ImageIoError&) {
+    }
+    return 0;
+}

@@ -1,0 +1,136 @@
+#!/usr/bin/env python3
+"""Seed corpora for the libFuzzer targets (docs/reliability.md), from examples/ and tests/ and a few small files
+written here. Usage: make_corpus.py OUT_DIR  (writes OUT_DIR/<target>/...; deterministic)."""
+import hashlib
+import json
+import os
+import struct
+import sys
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+MAX_SEED = 64 * 1024  # bigger seeds only slow every execution down
+
+
+def put(out, target, data):
+    if isinstance(data, str):
+        data = data.encode()
+    if len(data) > MAX_SEED:
+        return
+    d = os.path.join(out, target)
+    os.makedirs(d, exist_ok=True)
+    with open(os.path.join(d, hashlib.sha1(data).hexdigest()[:16]), "wb") as f:
+        f.write(data)
+
+
+def json_files():
+    for base in ("examples", "tests"):
+        for dirpath, _, files in os.walk(os.path.join(ROOT, base)):
+            for name in sorted(files):
+                if name.endswith(".json"):
+                    yield os.path.join(dirpath, name)
+
+
+def obj_text():
+    return ("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvn 0 0 1\n"
+            "f 1/1/1 2/2/1 3/3/1 4/4/1\n")
+
+
+def ply(fmt):
+    head = ("ply\nformat %s 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+            "property float nx\nproperty float ny\nproperty float nz\nproperty float u\nproperty float v\n"
+            "element face 1\nproperty list uchar int vertex_indices\nend_header\n" % fmt).encode()
+    verts = [(0, 0, 0, 0, 0, 1, 0, 0), (1, 0, 0, 0, 0, 1, 1, 0), (0, 1, 0, 0, 0, 1, 0, 1)]
+    if fmt == "ascii":
+        body = "".join(" ".join(str(x) for x in v) + "\n" for v in verts) + "3 0 1 2\n"
+        return head + body.encode()
+    e = "<" if fmt == "binary_little_endian" else ">"
+    body = b"".join(struct.pack(e + "8f", *v) for v in verts) + struct.pack(e + "B3i", 3, 0, 1, 2)
+    return head + body
+
+
+def gltf(binary):
+    pos = struct.pack("<9f", 0, 0, 0, 1, 0, 0, 0, 1, 0)
+    idx = struct.pack("<3H", 0, 1, 2) + b"\0\0"
+    buf = pos + idx
+    doc = {"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
+           "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1, "mode": 4}]}],
+           "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                          "min": [0, 0, 0], "max": [1, 1, 0]},
+                         {"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"}],
+           "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36},
+                           {"buffer": 0, "byteOffset": 36, "byteLength": 6}],
+           "buffers": [{"byteLength": len(buf)}]}
+    if not binary:
+        import base64
+        doc["buffers"][0]["uri"] = "data:application/octet-stream;base64," + base64.b64encode(buf).decode()
+        return json.dumps(doc).encode()
+    js = json.dumps(doc).encode()
+    js += b" " * (-len(js) % 4)
+    total = 12 + 8 + len(js) + 8 + len(buf)
+    return (struct.pack("<4sII", b"glTF", 2, total) + struct.pack("<I4s", len(js), b"JSON") + js +
+            struct.pack("<I4s", len(buf), b"BIN\0") + buf)
+
+
+def images(out):
+    try:
+        import OpenImageIO as oiio
+        import numpy as np
+    except ImportError:
+        print("make_corpus: no OpenImageIO Python module (python3-openimageio): image seeds from examples only")
+        return
+    import tempfile
+    exts = ["png", "exr", "ppm", "hdr", "tga", "tif", "jpg"]
+    px = (np.arange(8 * 8 * 3, dtype=np.float32).reshape(8, 8, 3) % 17) / 16.0
+    with tempfile.TemporaryDirectory() as tmp:
+        for i, ext in enumerate(exts):
+            path = os.path.join(tmp, "seed." + ext)
+            o = oiio.ImageOutput.create(path)
+            fmt = "half" if ext == "exr" else ("float" if ext == "hdr" else "uint8")
+            o.open(path, oiio.ImageSpec(8, 8, 3, fmt))
+            o.write_image(px)
+            o.close()
+            with open(path, "rb") as f:
+                data = f.read()
+            put(out, "fuzz_image", bytes([i]) + data)
+            put(out, "fuzz_image", bytes([i | 0x80]) + data)
+
+
+def main():
+    out = sys.argv[1]
+    for path in json_files():
+        try:
+            with open(path) as f:
+                text = f.read()
+            doc = json.loads(text)
+        except (ValueError, UnicodeDecodeError):
+            continue
+        if isinstance(doc, dict) and ("shapes" in doc or "camera" in doc):
+            put(out, "fuzz_scene", text)
+        mats = doc.get("materials") if isinstance(doc, dict) else None
+        if isinstance(mats, dict):
+            for m in mats.values():
+                if isinstance(m, dict) and "nodes" in m:
+                    put(out, "fuzz_graph", json.dumps(m))
+                    put(out, "fuzz_glsl", json.dumps(m))
+    put(out, "fuzz_mesh", b"\0" + obj_text().encode())
+    for i, fmt in enumerate(("ascii", "binary_little_endian", "binary_big_endian")):
+        put(out, "fuzz_mesh", b"\1" + ply(fmt))
+    put(out, "fuzz_mesh", b"\2" + gltf(False))
+    put(out, "fuzz_mesh", b"\3" + gltf(True))
+    for dirpath, _, files in os.walk(os.path.join(ROOT, "examples")):
+        for name in sorted(files):
+            ext = name.rsplit(".", 1)[-1].lower()
+            path = os.path.join(dirpath, name)
+            if ext in ("obj", "ply", "gltf", "glb"):
+                with open(path, "rb") as f:
+                    put(out, "fuzz_mesh", bytes([("obj", "ply", "gltf", "glb").index(ext)]) + f.read())
+            if ext in ("png", "exr"):
+                with open(path, "rb") as f:
+                    put(out, "fuzz_image", bytes([("png", "exr").index(ext)]) + f.read())
+    images(out)
+    for t in sorted(os.listdir(out)):
+        print("make_corpus: %-11s %4d seeds" % (t, len(os.listdir(os.path.join(out, t)))))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,46 @@
+#!/usr/bin/env bash
+# Runs every libFuzzer target of fuzz/ (docs/reliability.md) for SECONDS each (or RUNS executions each with --runs),
+# from seed corpora made by fuzz/make_corpus.py plus what earlier runs found (BUILD/fuzz-corpus, kept between runs).
+# Prints one line per target: executions, coverage (edges), corpus size, crashes; exits 1 if any target crashed and
+# leaves the crashing inputs in BUILD/fuzz-artifacts/<target>/.
+#   fuzz/run.sh BUILD SECONDS            e.g. fuzz/run.sh build-sanitize 60   (CI's smoke)
+#   fuzz/run.sh BUILD --runs N           e.g. fuzz/run.sh build-sanitize --runs 1000000
+set -uo pipefail
+cd "$(dirname "$0")/.."
+BUILD=${1:?usage: fuzz/run.sh BUILD SECONDS | --runs N}
+shift
+LIMIT=(-max_total_time="${1:?seconds}")
+if [ "$1" = "--runs" ]; then LIMIT=(-runs="${2:?executions}"); fi
+TARGETS=${SPECULA_FUZZ_TARGETS:-"fuzz_scene fuzz_graph fuzz_glsl fuzz_mesh fuzz_image"}
+CORPUS="$BUILD/fuzz-corpus"
+ARTIFACTS="$BUILD/fuzz-artifacts"
+SEEDS=$(mktemp -d)
+trap 'rm -rf "$SEEDS"' EXIT
+/usr/bin/python3 fuzz/make_corpus.py "$SEEDS" >/dev/null
+# shellcheck source=fuzz/sanitizer_env.sh
+. fuzz/sanitizer_env.sh
+export SPECULA_CACHE_DIR="$BUILD/fuzz-cache"  # glint dictionaries, P-NDFs, LTC prefilters: built once, kept
+status=0
+printf '%-11s %12s %9s %8s %8s %8s\n' target executions exec/s cov corpus crashes
+for t in $TARGETS; do
+  mkdir -p "$CORPUS/$t" "$ARTIFACTS/$t"
+  [ -d "$SEEDS/$t" ] && cp -n "$SEEDS/$t"/* "$CORPUS/$t/" 2>/dev/null
+  log="$BUILD/fuzz-$t.log"
+  # -rss_limit_mb: the targets' own limits (textures 4 GiB of floats) are checked against the memory budget first.
+  "$BUILD/fuzz/$t" "$CORPUS/$t" "${LIMIT[@]}" -rss_limit_mb=3072 -max_len=65536 -timeout=60 -print_final_stats=1 \
+      -artifact_prefix="$ARTIFACTS/$t/" >"$log" 2>&1
+  rc=$?
+  execs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
+  cov=$(grep -o 'cov: [0-9]*' "$log" | tail -1 | cut -d' ' -f2)
+  secs=$(sed -n 's/^Done [0-9]* runs in \([0-9]*\) second.*/\1/p' "$log" | tail -1)
+  rate=$([ -n "$secs" ] && [ "$secs" -gt 0 ] && echo $(( ${execs:-0} / secs )) || echo "-")
+  # crash-, leak-, timeout- and oom- inputs are findings; slow-unit- ones (over 10 s under ASan) are not
+  crashes=$(find "$ARTIFACTS/$t" -type f ! -name 'slow-unit-*' | wc -l)
+  printf '%-11s %12s %9s %8s %8s %8s\n' "$t" "${execs:-?}" "$rate" "${cov:-?}" "$(ls "$CORPUS/$t" | wc -l)" "$crashes"
+  if [ $rc -ne 0 ] || [ "$crashes" -ne 0 ]; then
+    status=1
+    echo "fuzz/run.sh: $t failed (exit $rc); log $log, inputs in $ARTIFACTS/$t/:" >&2
+    grep -m5 -E 'ERROR|SUMMARY|==[0-9]+==|runtime error|Assertion|abort' "$log" >&2
+  fi
+done
+exit $status
