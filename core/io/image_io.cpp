@@ -552,7 +552,12 @@ CompareResult compareImages(const std::string& pathA, const std::string& pathB, 
     r.channels = c;
     r.rmse = cr.rms_error;
     r.mae = cr.meanerror;
-    r.psnr = r.rmse > 0 ? -20.0 * std::log10(r.rmse) : std::numeric_limits<double>::infinity();
+    // PSNR against the reference's own peak (its largest value in the compared AOV), not 1.0: scene-linear HDR data
+    // has no unit peak (issue 16). A reference without a positive value falls back to 1.
+    double peak = 0.0;
+    for (float v : b->pixels) peak = std::max(peak, double(v));
+    r.peak = peak > 0.0 ? peak : 1.0;
+    r.psnr = r.rmse > 0 ? 20.0 * std::log10(r.peak / r.rmse) : std::numeric_limits<double>::infinity();
     r.meanA = meanOf(bufA);
     r.meanB = meanOf(bufB);
     if (!diffPng.empty()) writeDiffPng(diffPng, *a, *b, w, h);

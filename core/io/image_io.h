@@ -49,12 +49,13 @@ ImageSet readImageSet(const std::string& path);
 
 struct CompareResult {
     double rmse = 0, mae = 0, psnr = 0;  // over all pixels and channels of the compared AOV
+    double peak = 1;                     // PSNR's peak: the reference's (b's) largest value, 1 if it has none > 0
     double meanA = 0, meanB = 0;
     int width = 0, height = 0, channels = 0;
 };
 
 // Compares AOV 'aov' of two images with OpenImageIO's ImageBufAlgo (compare/computePixelStats).
-// PSNR uses peak 1.0. If diffPng is non-empty, writes a false-colour |A-B| map with a colour bar.
+// PSNR = 20 log10(peak / RMSE) with the reference's (b's) peak value. If diffPng is non-empty, writes a false-colour |A-B| map with a colour bar.
 // Throws ImageIoError on missing files, missing AOV or size mismatch (message names both).
 CompareResult compareImages(const std::string& pathA, const std::string& pathB, const std::string& aov = "beauty",
                             const std::string& diffPng = "");

@@ -231,12 +231,12 @@ int main(int argc, char** argv) {
                 // JSON has no infinity: identical images report "psnr": null.
                 char psnr[32] = "null";
                 if (std::isfinite(r.psnr)) std::snprintf(psnr, sizeof psnr, "%.6g", r.psnr);
-                std::printf("{\"aov\":%s,\"rmse\":%.9g,\"mae\":%.9g,\"psnr\":%s,\"mean_a\":%.9g,\"mean_b\":%.9g}\n",
-                            jsonString(aov).c_str(), r.rmse, r.mae, psnr, r.meanA, r.meanB);
+                std::printf("{\"aov\":%s,\"rmse\":%.9g,\"mae\":%.9g,\"psnr\":%s,\"psnr_peak\":%.9g,\"mean_a\":%.9g,\"mean_b\":%.9g}\n",
+                            jsonString(aov).c_str(), r.rmse, r.mae, psnr, r.peak, r.meanA, r.meanB);
             }
             else
-                std::printf("aov   %s (%dx%d, %d channels)\nRMSE  %.6g\nMAE   %.6g\nPSNR  %.3f dB\n", aov.c_str(), r.width,
-                            r.height, r.channels, r.rmse, r.mae, r.psnr);
+                std::printf("aov   %s (%dx%d, %d channels)\nRMSE  %.6g\nMAE   %.6g\nPSNR  %.3f dB (peak %.6g: the reference's maximum)\n",
+                            aov.c_str(), r.width, r.height, r.channels, r.rmse, r.mae, r.psnr, r.peak);
         } catch (const Error& e) {
             exitCode = reportError(e, e.exitCode());  // NaN/Inf in an image: bad input (1)
         } catch (const std::exception& e) {

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include <chrono>
+#include <cmath>
 #include <limits>
 #include <csignal>
 #include <filesystem>
@@ -144,6 +145,10 @@ TEST(Cli, CompareReportsRmseMaePsnrAndWritesDiffMap) {
     auto diff = nlohmann::json::parse(out);
     EXPECT_GT(diff["rmse"].get<double>(), 0.0);
     EXPECT_GE(diff["rmse"].get<double>(), diff["mae"].get<double>());
+    // PSNR uses the reference's peak (b's largest specular value), not 1.0.
+    EXPECT_GT(diff["psnr_peak"].get<double>(), 0.0);
+    EXPECT_NE(diff["psnr_peak"].get<double>(), 1.0);
+    EXPECT_NEAR(diff["psnr"].get<double>(), 20.0 * std::log10(diff["psnr_peak"].get<double>() / diff["rmse"].get<double>()), 1e-4);
     EXPECT_TRUE(fs::exists(dir + "/diff.png"));
 }
 

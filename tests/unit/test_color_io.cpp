@@ -405,7 +405,8 @@ TEST(ImageIo, CompareImages) {
     CompareResult off = compareImages(a, b, "beauty", dir + "/diff.png");
     EXPECT_DOUBLE_EQ(off.rmse, 0.25);
     EXPECT_DOUBLE_EQ(off.mae, 0.25);
-    EXPECT_NEAR(off.psnr, -20.0 * std::log10(0.25), 1e-9);
+    EXPECT_DOUBLE_EQ(off.peak, 0.5);  // b is the reference: PSNR uses its peak, not 1
+    EXPECT_NEAR(off.psnr, 20.0 * std::log10(0.5 / 0.25), 1e-9);
     EXPECT_NEAR(off.meanA, 0.25, 1e-9);
     EXPECT_NEAR(off.meanB, 0.5, 1e-9);
     ASSERT_TRUE(fs::exists(dir + "/diff.png"));
