@@ -29,6 +29,15 @@ std::string writeScratch(const std::string& name, const uint8_t* data, size_t si
     return path;
 }
 
+bool parseJson(const uint8_t* data, size_t size, nlohmann::json& out) {
+    try {
+        out = nlohmann::json::parse(data, data + size);
+        return true;
+    } catch (const nlohmann::json::parse_error&) {
+        return false;
+    }
+}
+
 ShadingPoint fuzzShadingPoint() {
     ShadingPoint sp;
     sp.p = Vec3(0.3f, -0.2f, 0.93f);

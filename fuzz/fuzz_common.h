@@ -4,6 +4,8 @@
 
 #include "core/render/shading.h"
 
+#include <nlohmann/json.hpp>
+
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -17,6 +19,9 @@ const std::string& scratchDir();
 void clearScratch();
 // Writes bytes to scratchDir()/name and returns the path.
 std::string writeScratch(const std::string& name, const uint8_t* data, size_t size);
+
+// The input as JSON; false for text the JSON parser rejects (not a finding: the parser is not ours).
+bool parseJson(const uint8_t* data, size_t size, nlohmann::json& out);
 
 // A shading point with differentials, as a camera ray at a unit sphere would give.
 ShadingPoint fuzzShadingPoint();

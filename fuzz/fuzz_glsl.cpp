@@ -4,6 +4,7 @@
 #include "core/codegen/glsl_emitter.h"
 #include "core/graph/graph.h"
 #include "core/util/error.h"
+#include "fuzz/fuzz_common.h"
 
 #include <glslang/Public/ResourceLimits.h>
 #include <glslang/Public/ShaderLang.h>
@@ -39,11 +40,7 @@ bool compiles(const std::string& module, std::string& log) {
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     nlohmann::json material;
-    try {
-        material = nlohmann::json::parse(data, data + size);
-    } catch (const nlohmann::json::parse_error&) {
-        return 0;
-    }
+    if (!fuzz::parseJson(data, size, material)) return 0;
     try {
         graph::GraphDesc g = graph::parseGraph(material, "/m");
         for (bool uniforms : {true, false}) {

@@ -20,11 +20,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     static TextureStore store(ColorConfig::load("builtin"));
     static const std::string baseDir = std::string(SPECULA_SOURCE_DIR) + "/examples";
     nlohmann::json material;
-    try {
-        material = nlohmann::json::parse(data, data + size);
-    } catch (const nlohmann::json::parse_error&) {
-        return 0;
-    }
+    if (!fuzz::parseJson(data, size, material)) return 0;
     try {
         graph::GraphDesc g = graph::parseGraph(material, "/m", graph::ParseOptions{false});
         GraphLoadContext load{&store, baseDir, nullptr};
