@@ -1,6 +1,7 @@
 // Graph validation (parseGraph), compilation to a flat instruction list (Program::compile) and the
 // per-shading-point interpreter loop (Program::run).
 #include "core/graph/graph.h"
+#include "core/graph/node_params.h"
 
 #include "core/graph/graph_material.h"
 #include "core/util/error.h"
@@ -458,14 +459,7 @@ void Program::preRead(Instr& ins, const ParamLayout& layout, uint32_t dynamicPor
     std::shared_ptr<char> block(storage, reinterpret_cast<char*>(storage.get()));
     for (const ParamField& f : layout.fields) {
         if (f.kind == ParamField::Closure) dynamicPorts |= 1u << f.port;
-        if (dynamicPorts >> f.port & 1) continue;
-        char* dst = block.get() + f.offset;
-        if (f.kind == ParamField::Enum) {
-            int v = int(ins.in[f.port]);
-            std::memcpy(dst, &v, sizeof v);
-        } else {
-            std::memcpy(dst, tmpl_.data() + ins.in[f.port], 4 * size_t(f.width));
-        }
+        if (!(dynamicPorts >> f.port & 1)) readParamField(tmpl_.data(), ins, f, block.get());
     }
     ins.constParams = block.get();
     ins.constLayout = &layout;

@@ -74,6 +74,36 @@ inline bool wanted(const Instr& i, OutPort<T> o) {
 // The closure (and its emission) of a closure output.
 inline int slotOf(const EvalContext& c, const Instr& i, OutPort<ClosureRef> o) { return int(c.r[i.out[o.index]]); }
 
+// Reads port fd of instruction i from the registers r into the parameter struct at base. Program::compile uses it
+// with the register template to pre-read the constant ports; NodeParams::read with the shade's registers.
+inline void readParamField(const float* r, const Instr& i, const ParamField& fd, char* base) {
+    switch (fd.kind) {
+        case ParamField::Floats: {
+            // Fixed-size copies (the widths are 1, 2 or 3): a per-float loop was a third of a GGX node's time in
+            // bench_graph.
+            const float* src = r + i.in[fd.port];
+            char* dst = base + fd.offset;
+            switch (fd.width) {
+                case 1: std::memcpy(dst, src, 4); break;
+                case 2: std::memcpy(dst, src, 8); break;
+                case 3: std::memcpy(dst, src, 12); break;
+                default: std::memcpy(dst, src, 4 * size_t(fd.width)); break;
+            }
+            break;
+        }
+        case ParamField::Enum: {
+            int v = int(i.in[fd.port]);
+            std::memcpy(base + fd.offset, &v, sizeof v);
+            break;
+        }
+        case ParamField::Closure: {
+            ClosureRef ref{int(r[i.in[fd.port]])};
+            std::memcpy(base + fd.offset, &ref, sizeof ref);
+            break;
+        }
+    }
+}
+
 // The parameter list of a node with parameter struct P: builder calls bind members to ports in order.
 template <class P>
 class NodeParams {
@@ -167,7 +197,7 @@ public:
     // was built for this struct, and then only the ports that vary per shading point.
 #if defined(__GNUC__) && !defined(__clang__)
 #pragma GCC diagnostic push
-// GCC cannot see that a field's width is the width of its member once readField is inlined (field widths are
+// GCC cannot see that a field's width is the width of its member once readParamField is inlined (field widths are
 // checked when the port is declared).
 #pragma GCC diagnostic ignored "-Warray-bounds"
 #pragma GCC diagnostic ignored "-Wstringop-overflow"
@@ -178,10 +208,10 @@ public:
         if (i.constLayout == &layout_) {
             std::memcpy(base, i.constParams, sizeof(P));
             for (uint32_t m = i.dynamicPorts & dynamicCandidates_; m; m &= m - 1)
-                readField(c, i, layout_.fields[fieldOfPort_[__builtin_ctz(m)]], base);
+                readParamField(c.r, i, layout_.fields[fieldOfPort_[__builtin_ctz(m)]], base);
             return p;
         }
-        for (const ParamField& fd : layout_.fields) readField(c, i, fd, base);
+        for (const ParamField& fd : layout_.fields) readParamField(c.r, i, fd, base);
         return p;
     }
 #if defined(__GNUC__) && !defined(__clang__)
@@ -189,33 +219,6 @@ public:
 #endif
 
 private:
-    static void readField(const EvalContext& c, const Instr& i, const ParamField& fd, char* base) {
-        switch (fd.kind) {
-            case ParamField::Floats: {
-                // Fixed-size copies (the widths are 1, 2 or 3): a per-float loop was a third of a GGX node's time in
-                // bench_graph.
-                const float* src = c.r + i.in[fd.port];
-                char* dst = base + fd.offset;
-                switch (fd.width) {
-                    case 1: std::memcpy(dst, src, 4); break;
-                    case 2: std::memcpy(dst, src, 8); break;
-                    case 3: std::memcpy(dst, src, 12); break;
-                    default: std::memcpy(dst, src, 4 * size_t(fd.width)); break;
-                }
-                break;
-            }
-            case ParamField::Enum: {
-                int v = int(i.in[fd.port]);
-                std::memcpy(base + fd.offset, &v, sizeof v);
-                break;
-            }
-            case ParamField::Closure: {
-                ClosureRef r{int(c.r[i.in[fd.port]])};
-                std::memcpy(base + fd.offset, &r, sizeof r);
-                break;
-            }
-        }
-    }
     void addField(size_t offset, uint8_t width, ParamField::Kind kind) {
         uint8_t port = uint8_t(ports_.size() - 1);
         if (port >= 32) fatal("more than 32 ports");
