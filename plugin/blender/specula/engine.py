@@ -130,8 +130,9 @@ class SpeculaRenderEngine(bpy.types.RenderEngine):
             try:
                 line = lines.get(timeout=0.05)
             except queue.Empty:
-                if proc.poll() is not None and lines.empty():
-                    break
+                # Keep waiting after the process has exited: its last lines (the "done" event) may still be on their
+                # way through the reader thread, which ends the stream with None at EOF. Breaking on exit lost them
+                # on a loaded machine ("Specula render failed (exit 0): no output").
                 continue
             if line is None:
                 break
