@@ -33,7 +33,9 @@ bool parseJson(const uint8_t* data, size_t size, nlohmann::json& out) {
     try {
         out = nlohmann::json::parse(data, data + size);
         return true;
-    } catch (const nlohmann::json::parse_error&) {
+    } catch (const nlohmann::json::exception&) {
+        // parse_error and also out_of_range (406: a number such as 1e777777 that overflows a double); the product's
+        // loaders catch the base class too (scene_loader.cpp parseJson).
         return false;
     }
 }

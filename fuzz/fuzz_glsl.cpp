@@ -1,6 +1,6 @@
 // libFuzzer target: a material graph (JSON) through the GLSL emitter (uniform literals and inline literals, with a
 // prefix); every module the emitter returns must compile with glslang's library as a GLSL 4.50 fragment shader.
-// Only specula::Error (and the JSON parser's parse_error) may leave; a module that does not compile is a finding.
+// Only specula::Error (and the JSON parser's exceptions) may leave; a module that does not compile is a finding.
 #include "core/codegen/glsl_emitter.h"
 #include "core/graph/graph.h"
 #include "core/util/error.h"

@@ -1,6 +1,6 @@
 // libFuzzer target: a material graph (JSON) through validation, compilation and evaluation on the CPU: parseGraph,
 // Program::compile (with a texture store), one shade at a shading point with differentials, then queries and
-// samples of the closure. Only specula::Error (and the JSON parser's parse_error) may leave; anything else, a crash or
+// samples of the closure. Only specula::Error (and the JSON parser's exceptions) may leave; anything else, a crash or
 // a non-finite closure value for finite inputs is a finding.
 #include "core/color/color_config.h"
 #include "core/graph/graph.h"

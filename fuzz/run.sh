@@ -32,12 +32,16 @@ export SPECULA_CACHE_DIR="$BUILD/fuzz-cache"  # glint dictionaries, P-NDFs, LTC 
 status=0
 printf '%-11s %12s %9s %8s %8s %8s\n' target executions exec/s cov corpus crashes
 for t in $TARGETS; do
-  mkdir -p "$CORPUS/$t" "$ARTIFACTS/$t"
-  [ -d "$SEEDS/$t" ] && cp -n "$SEEDS/$t"/* "$CORPUS/$t/" 2>/dev/null
+  corpus="$CORPUS/$t"
+  # The smoke run starts from the seeds alone, as in a clean clone: a corpus grown by earlier runs would take the
+  # fixed-seed run down another path, and a smoke run that passed here could fail in CI.
+  if [ $SMOKE = 1 ]; then corpus="$SEEDS/smoke-$t"; fi
+  mkdir -p "$corpus" "$ARTIFACTS/$t"
+  [ -d "$SEEDS/$t" ] && cp -n "$SEEDS/$t"/* "$corpus/" 2>/dev/null
   log="$BUILD/fuzz-$t.log"
   # -rss_limit_mb: the targets' own limits (textures 4 GiB of floats) are checked against the memory budget first.
   if [ $SMOKE = 1 ]; then LIMIT=(-seed=1 -runs="$(smoke_runs "$t")"); fi
-  "$BUILD/fuzz/$t" "$CORPUS/$t" "${LIMIT[@]}" -rss_limit_mb=3072 -max_len=65536 -timeout=60 -print_final_stats=1 \
+  "$BUILD/fuzz/$t" "$corpus" "${LIMIT[@]}" -rss_limit_mb=3072 -max_len=65536 -timeout=60 -print_final_stats=1 \
       -artifact_prefix="$ARTIFACTS/$t/" >"$log" 2>&1
   rc=$?
   execs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
@@ -46,7 +50,7 @@ for t in $TARGETS; do
   rate=$([ -n "$secs" ] && [ "$secs" -gt 0 ] && echo $(( ${execs:-0} / secs )) || echo "-")
   # crash-, leak-, timeout- and oom- inputs are findings; slow-unit- ones (over 10 s under ASan) are not
   crashes=$(find "$ARTIFACTS/$t" -type f ! -name 'slow-unit-*' | wc -l)
-  printf '%-11s %12s %9s %8s %8s %8s\n' "$t" "${execs:-?}" "$rate" "${cov:-?}" "$(ls "$CORPUS/$t" | wc -l)" "$crashes"
+  printf '%-11s %12s %9s %8s %8s %8s\n' "$t" "${execs:-?}" "$rate" "${cov:-?}" "$(ls "$corpus" | wc -l)" "$crashes"
   if [ $rc -ne 0 ] || [ "$crashes" -ne 0 ]; then
     status=1
     echo "fuzz/run.sh: $t failed (exit $rc); log $log, inputs in $ARTIFACTS/$t/:" >&2
