@@ -21,6 +21,12 @@ struct TriangleMesh {
     size_t triangleCount() const { return indices.size(); }
 };
 
+// Where each vertex attribute of a loaded mesh came from (`specula info`, the loader's warnings).
+struct MeshAttributeSources {
+    enum Source : uint8_t { None, File, Computed };
+    Source normals = None, uvs = None, tangents = None;
+};
+
 // Exact differential geometry of a parametric surface (object space).
 struct SurfaceGeometry {
     Vec3 p;           // point on the exact surface

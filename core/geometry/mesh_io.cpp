@@ -433,15 +433,64 @@ void finalizeMesh(TriangleMesh& mesh, const std::string& path) {
                                          " vertices)");
     for (const auto& p : mesh.positions)
         if (!isFinite(p)) throwMeshError(path, "non-finite vertex position");
-    // Policy: a mesh without normals stays flat-shaded (normals empty) - unless it has uvs, because
-    // tangents are defined relative to a shading normal; computeTangents then derives area-weighted
-    // vertex normals first.
-    if (!mesh.uvs.empty() && mesh.tangents.empty()) computeTangents(mesh);
+}
+
+// Normals by the scene's shading mode (MeshShading), then tangents from uvs where the file has none: tangents are
+// relative to the shading normal, so they are made after it.
+void completeAttributes(TriangleMesh& mesh, const MeshShading& shading, MeshAttributeSources& src) {
+    src.normals = mesh.normals.empty() ? MeshAttributeSources::None : MeshAttributeSources::File;
+    src.uvs = mesh.uvs.empty() ? MeshAttributeSources::None : MeshAttributeSources::File;
+    src.tangents = mesh.tangents.empty() ? MeshAttributeSources::None : MeshAttributeSources::File;
+    if (shading.mode == MeshShading::Flat) {
+        // The file's tangents belong to its (smooth) normals: remade below from the uvs.
+        mesh.normals.clear();
+        mesh.tangents.clear();
+        src.tangents = MeshAttributeSources::None;
+        computeAngleNormals(mesh, 0.f);
+        src.normals = MeshAttributeSources::Computed;
+    } else if (mesh.normals.empty()) {
+        computeAngleNormals(mesh, shading.mode == MeshShading::Smooth ? 180.f : shading.smoothAngleDegrees);
+        src.normals = MeshAttributeSources::Computed;
+    }
+    if (!mesh.uvs.empty() && mesh.tangents.empty()) {
+        computeTangents(mesh);
+        src.tangents = MeshAttributeSources::Computed;
+    }
+}
+
+// Hash of a position's exact bits: vertices at one position share their normal whatever their uvs.
+struct PositionKey {
+    uint32_t x, y, z;
+    bool operator==(const PositionKey& o) const { return x == o.x && y == o.y && z == o.z; }
+};
+struct PositionKeyHash {
+    size_t operator()(const PositionKey& k) const {
+        uint64_t h = k.x * 0x9E3779B97F4A7C15ull;
+        h ^= (h >> 29) + k.y * 0xBF58476D1CE4E5B9ull;
+        h ^= (h >> 31) + k.z * 0x94D049BB133111EBull;
+        return size_t(h ^ (h >> 32));
+    }
+};
+PositionKey positionKey(const Vec3& p) {
+    PositionKey k;
+    const Vec3 q = p + Vec3(0.f);  // -0 and +0 are one position
+    std::memcpy(&k.x, &q.x, 4);
+    std::memcpy(&k.y, &q.y, 4);
+    std::memcpy(&k.z, &q.z, 4);
+    return k;
 }
 
 }  // namespace
 
-TriangleMesh loadMesh(const std::string& path) {
+const char* attributeSourceName(MeshAttributeSources::Source s) {
+    switch (s) {
+        case MeshAttributeSources::File: return "from the file";
+        case MeshAttributeSources::Computed: return "computed";
+        default: return "none";
+    }
+}
+
+TriangleMesh loadMesh(const std::string& path, const MeshShading& shading, MeshAttributeSources* sources) {
     std::error_code ec;
     if (!std::filesystem::exists(path, ec)) throwMeshError(path, "file not found");
     if (!std::filesystem::is_regular_file(path, ec)) throwMeshError(path, "not a regular file");
@@ -458,7 +507,133 @@ TriangleMesh loadMesh(const std::string& path) {
     else
         throwMeshError(path, "unknown mesh extension '" + ext + "' (expected .obj, .ply, .gltf or .glb)");
     finalizeMesh(mesh, path);
+    MeshAttributeSources src;
+    completeAttributes(mesh, shading, src);
+    if (sources) *sources = src;
     return mesh;
+}
+
+// Auto smooth (Blender's "Smooth by Angle"): an edge between two triangles whose normals differ by more than the
+// angle is sharp, as is an edge of one or of three and more triangles. Around each vertex position the corners that
+// are connected across smooth edges form one fan and share one normal: the mean of the fan's face normals weighted
+// by the corner angles (Thürmer & Wüthrich 1998, so a cube corner's normal is its diagonal however its faces are
+// triangulated). 180 degrees (Smooth) takes every triangle around the position. Union-find over corners: linear time.
+void computeAngleNormals(TriangleMesh& mesh, float angleDegrees) {
+    const size_t nv = mesh.positions.size(), nt = mesh.indices.size();
+    for (const auto& t : mesh.indices)
+        if (t.x >= nv || t.y >= nv || t.z >= nv) throw std::out_of_range("computeAngleNormals: index out of range");
+    std::unordered_map<PositionKey, uint32_t, PositionKeyHash> ids;
+    ids.reserve(nv);
+    std::vector<uint32_t> posId(nv);
+    for (size_t i = 0; i < nv; ++i) posId[i] = ids.emplace(positionKey(mesh.positions[i]), uint32_t(ids.size())).first->second;
+    auto pid = [&](size_t f, int k) { return posId[mesh.indices[f][k]]; };
+    // Unit face normals and the angle-weighted normal of each corner (corner c = 3 f + k).
+    std::vector<DVec3> faceU(nt), cornerW(3 * nt);
+    for (size_t f = 0; f < nt; ++f) {
+        const auto& t = mesh.indices[f];
+        const DVec3 p[3] = {DVec3(mesh.positions[t.x]), DVec3(mesh.positions[t.y]), DVec3(mesh.positions[t.z])};
+        const DVec3 fn = glm::cross(p[1] - p[0], p[2] - p[0]);
+        const double len = glm::length(fn);
+        faceU[f] = len > 0 && std::isfinite(len) ? fn / len : DVec3(0.0);
+        for (int k = 0; k < 3; ++k) {
+            const DVec3 a = p[(k + 1) % 3] - p[k], b = p[(k + 2) % 3] - p[k];
+            const double la = glm::length(a), lb = glm::length(b);
+            const double angle = la > 0 && lb > 0 ? std::acos(std::clamp(glm::dot(a, b) / (la * lb), -1.0, 1.0)) : 0.0;
+            cornerW[3 * f + k] = faceU[f] * angle;
+        }
+    }
+    std::vector<uint32_t> parent(3 * nt);
+    for (size_t c = 0; c < parent.size(); ++c) parent[c] = uint32_t(c);
+    auto find = [&](uint32_t c) {
+        while (parent[c] != c) c = parent[c] = parent[parent[c]];
+        return c;
+    };
+    auto unite = [&](uint32_t a, uint32_t b) {
+        a = find(a), b = find(b);
+        if (a != b) parent[std::max(a, b)] = std::min(a, b);  // the smaller root: independent of visiting order
+    };
+    if (angleDegrees >= 180.f) {
+        // Smooth: every corner at a position joins the first corner seen there.
+        std::vector<uint32_t> firstCorner(ids.size(), UINT32_MAX);
+        for (size_t c = 0; c < 3 * nt; ++c) {
+            uint32_t& fc = firstCorner[pid(c / 3, int(c % 3))];
+            if (fc == UINT32_MAX) fc = uint32_t(c);
+            else unite(fc, uint32_t(c));
+        }
+    } else {
+        // Edges by their two position ids; the triangles on each (up to two kept, a third marks it non-manifold).
+        struct EdgeFaces {
+            uint32_t face[2];
+            uint8_t count = 0;
+        };
+        struct EdgeHash {
+            size_t operator()(uint64_t k) const { return size_t(k * 0x9E3779B97F4A7C15ull >> 17); }
+        };
+        std::unordered_map<uint64_t, EdgeFaces, EdgeHash> edges;
+        edges.reserve(3 * nt / 2 + 1);
+        auto edgeKey = [](uint32_t a, uint32_t b) { return (uint64_t(std::min(a, b)) << 32) | std::max(a, b); };
+        for (size_t f = 0; f < nt; ++f)
+            for (int k = 0; k < 3; ++k) {
+                const uint32_t a = pid(f, k), b = pid(f, (k + 1) % 3);
+                if (a == b) continue;  // a collapsed edge joins nothing
+                EdgeFaces& e = edges[edgeKey(a, b)];
+                if (e.count < 2) e.face[e.count] = uint32_t(f);
+                e.count = uint8_t(std::min(3, e.count + 1));
+            }
+        const double cosLimit = std::cos(double(angleDegrees) * 3.14159265358979323846 / 180.0) - 1e-9;
+        auto cornerAt = [&](uint32_t f, uint32_t position) {
+            for (int k = 0; k < 3; ++k)
+                if (pid(f, k) == position) return 3 * f + uint32_t(k);
+            return UINT32_MAX;
+        };
+        for (const auto& [key, e] : edges) {
+            if (e.count != 2) continue;
+            const uint32_t f = e.face[0], g = e.face[1];
+            if (faceU[f] == DVec3(0.0) || faceU[g] == DVec3(0.0) || glm::dot(faceU[f], faceU[g]) < cosLimit) continue;
+            for (uint32_t position : {uint32_t(key >> 32), uint32_t(key & 0xFFFFFFFFu)}) unite(cornerAt(f, position), cornerAt(g, position));
+        }
+    }
+    // Each fan's normal; a fan of degenerate triangles takes the position's smooth normal, then +z.
+    std::vector<DVec3> fanSum(3 * nt, DVec3(0.0)), positionSum(ids.size(), DVec3(0.0));
+    for (size_t c = 0; c < 3 * nt; ++c) {
+        fanSum[find(uint32_t(c))] += cornerW[c];
+        positionSum[pid(c / 3, int(c % 3))] += cornerW[c];
+    }
+    auto unit = [](const DVec3& v, Vec3& out) {
+        const double len = glm::length(v);
+        if (!(len > 1e-300) || !std::isfinite(len)) return false;
+        out = Vec3(v / len);
+        return true;
+    };
+    // New vertices: one per (old vertex, fan normal).
+    struct CornerKey {
+        uint32_t vertex;
+        PositionKey normal;
+        bool operator==(const CornerKey& o) const { return vertex == o.vertex && normal == o.normal; }
+    };
+    struct CornerKeyHash {
+        size_t operator()(const CornerKey& k) const { return PositionKeyHash()(k.normal) ^ (size_t(k.vertex) * 0x9E3779B1u); }
+    };
+    std::unordered_map<CornerKey, uint32_t, CornerKeyHash> corners;
+    corners.reserve(nv);
+    TriangleMesh out;
+    out.indices.resize(nt);
+    const bool hasUv = mesh.uvs.size() == nv, hasTangent = mesh.tangents.size() == nv;
+    for (size_t f = 0; f < nt; ++f)
+        for (int k = 0; k < 3; ++k) {
+            const uint32_t v = mesh.indices[f][k];
+            Vec3 n(0, 0, 1);
+            if (!unit(fanSum[find(uint32_t(3 * f + k))], n)) unit(positionSum[posId[v]], n);
+            auto [it, added] = corners.emplace(CornerKey{v, positionKey(n)}, uint32_t(out.positions.size()));
+            if (added) {
+                out.positions.push_back(mesh.positions[v]);
+                out.normals.push_back(n);
+                if (hasUv) out.uvs.push_back(mesh.uvs[v]);
+                if (hasTangent) out.tangents.push_back(mesh.tangents[v]);
+            }
+            out.indices[f][k] = it->second;
+        }
+    mesh = std::move(out);
 }
 
 // Area-weighted vertex normals: the unnormalised face normal cross(p1-p0, p2-p0) has length twice the

@@ -183,6 +183,10 @@ public:
         ports_.back().binding = b;
         return *this;
     }
+    NodeParams& orientsByTangent() {  // connected or non-zero, the result turns with the tangent (anisotropy)
+        ports_.back().orientsByTangent = true;
+        return *this;
+    }
 
     const std::vector<PortSpec>& ports() const { return ports_; }
 

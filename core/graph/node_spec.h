@@ -74,6 +74,9 @@ struct PortSpec {
     bool required = false;  // no default: must be connected (closures) or given (strings)
     bool uniform = false;   // one value per material, never per shading point (sampler state, derivative mode):
                             // connections are refused, and GLSL may rely on uniform control flow
+    // Connected or non-zero, the node's result turns with the tangent (anisotropy): on a mesh without uvs the tangent
+    // is an arbitrary direction, and the scene loader warns (ports bound to GeomBinding::UV warn by themselves).
+    bool orientsByTangent = false;
 
     // Fluent construction used by the node files.
     static PortSpec make(std::string n, TypeDesc t, std::array<float, 3> d, std::string doc_) {
@@ -182,6 +185,7 @@ enum NodeFlags : uint32_t {
     kPure = 1u << 0,              // outputs depend only on inputs: folded when all inputs are constant
     kNeedsDerivatives = 1u << 1,  // reads screen-space differentials (sp.dpdx..., GLSL dFdx/dFdy)
     kEmissive = 1u << 2,          // can produce emission
+    kReadsUv = 1u << 3,           // reads the surface's uvs (or the tangent made from them) without a uv input port
 };
 
 // Where a node's parameter struct keeps each port (built by NodeParams<P>): Program::compile fills a copy of the struct

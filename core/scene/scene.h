@@ -74,6 +74,8 @@ struct ShapeInstance {
     Mat3 normalToWorld{1.f};   // inverse transpose of the linear part
     int material = -1;         // index into Scene::materials; -1 for light geometry
     int areaLight = -1;        // index into Scene::lights for emitting quads
+    std::string meshFile;      // the file of a "mesh" shape ("" for built-in shapes)
+    MeshAttributeSources attributes;  // where a mesh file's normals, uvs and tangents came from
 };
 
 struct Scene {

@@ -205,7 +205,7 @@ void readShape(const Json& j, const std::string& ptr, Context& ctx) {
     else if (type == "disk") keys.push_back("radius");
     else if (type == "cylinder") { keys.push_back("radius"); keys.push_back("height"); }
     else if (type == "torus") { keys.push_back("major_radius"); keys.push_back("minor_radius"); }
-    else if (type == "mesh") { keys.push_back("file"); }
+    else if (type == "mesh") { keys.insert(keys.end(), {"file", "shading", "smooth_angle"}); }
     else
         throw InputError(ptr + "/type", "unknown shape type '" + (type.empty() ? j.at("type").dump() : type) +
                                             "'; valid types: sphere, quad, disk, cylinder, torus, mesh",
@@ -232,11 +232,18 @@ void readShape(const Json& j, const std::string& ptr, Context& ctx) {
         b = makeTorus(R, rr, seg);
     } else {
         std::string file = fileMustExist(ctx, r, "file");
+        MeshShading shading;
+        const std::string mode = r.enumeration("shading", "auto", {"auto", "smooth", "flat"});
+        shading.mode = mode == "flat" ? MeshShading::Flat : mode == "smooth" ? MeshShading::Smooth : MeshShading::Auto;
+        shading.smoothAngleDegrees = r.number("smooth_angle", 30.f, 0.f, 180.f);
+        if (r.has("smooth_angle") && shading.mode != MeshShading::Auto)
+            r.fail("smooth_angle", "smooth_angle applies to \"shading\": \"auto\" only (this mesh is \"" + mode + "\")");
         try {
-            b.mesh = loadMesh(file);
+            b.mesh = loadMesh(file, shading, &sh.attributes);
         } catch (const MeshLoadError& e) {
             throw IoError(r.pointer("file") + ": " + e.what());
         }
+        sh.meshFile = r.string("file", "");
     }
     sh.mesh = std::move(b.mesh);
     // The rasteriser shades the tessellation's interpolated attributes, so the raster integrator does too: built-in
@@ -439,6 +446,52 @@ Json parseJson(const std::string& text, const std::string& name) {
 
 }  // namespace
 
+// Why a node of a material reads uvs (or a tangent made from them), or "": a port bound to the surface's uvs left
+// unconnected, a node that reads them itself (kReadsUv), or an anisotropy-like port in use (PortSpec::orientsByTangent).
+std::string uvUse(const graph::NodeInstance& node) {
+    using graph::InputValue;
+    if (node.spec->has(graph::kReadsUv)) return "reads the surface's uvs";
+    for (size_t k = 0; k < node.inputs.size(); ++k) {
+        const graph::PortSpec& port = node.spec->inputs[k];
+        const InputValue& v = node.inputs[k];
+        const bool bound = v.kind == InputValue::Kind::Binding || v.kind == InputValue::Kind::Default;
+        switch (port.binding) {
+            case graph::GeomBinding::UV:
+            case graph::GeomBinding::DUVDX:
+            case graph::GeomBinding::DUVDY:
+            case graph::GeomBinding::PixelDUVDX:
+            case graph::GeomBinding::PixelDUVDY:
+                if (bound) return "reads uvs (port '" + port.name + "')";
+                break;
+            default: break;
+        }
+        if (port.orientsByTangent &&
+            (v.kind == InputValue::Kind::Connection || (v.kind == InputValue::Kind::Literal && v.value[0] != 0.f)))
+            return "turns with the tangent, which uvs define (port '" + port.name + "')";
+    }
+    return "";
+}
+
+// A mesh file without uvs under a material that reads them renders with u = v = 0 and an arbitrary tangent: the
+// glints, LEAN and normal maps then look wrong without an error, so the loader says which shape and node.
+void warnAboutMissingUvs(Scene& scene) {
+    for (size_t i = 0; i < scene.shapes.size(); ++i) {
+        const ShapeInstance& sh = scene.shapes[i];
+        if (sh.meshFile.empty() || sh.attributes.uvs != MeshAttributeSources::None || sh.material < 0) continue;
+        const auto* gm = dynamic_cast<const GraphMaterial*>(scene.materials[size_t(sh.material)].get());
+        if (!gm) continue;
+        const graph::GraphDesc& g = gm->desc();
+        for (int n : g.liveOrder({{g.outputNode, g.outputPort}})) {
+            const graph::NodeInstance& node = g.nodes[size_t(n)];
+            const std::string why = uvUse(node);
+            if (why.empty()) continue;
+            scene.warnings.push_back("/shapes/" + std::to_string(i) + ": mesh '" + sh.meshFile + "' ('" + sh.name +
+                                     "') has no uvs, but node '" + node.id + "' (" + node.spec->id + ") of material '" +
+                                     gm->name() + "' " + why + ": it will see u = v = 0 and an arbitrary tangent");
+        }
+    }
+}
+
 Scene loadSceneFromString(const std::string& text, const std::string& baseDir, const SceneOverrides& ov,
                           const std::string& name) {
     Json root = parseJson(text, name);
@@ -496,6 +549,7 @@ Scene loadSceneFromString(const std::string& text, const std::string& baseDir, c
     const Json& shapes = root.at("shapes");
     if (!shapes.is_array()) throw InputError("/shapes", "expected an array of shapes, got " + jsonTypeName(shapes));
     for (size_t i = 0; i < shapes.size(); ++i) readShape(shapes[i], "/shapes/" + std::to_string(i), ctx);
+    warnAboutMissingUvs(scene);
     if (top.has("lights")) {
         const Json& lights = root.at("lights");
         if (!lights.is_array()) throw InputError("/lights", "expected an array of lights, got " + jsonTypeName(lights));
@@ -527,20 +581,35 @@ Scene loadScene(const std::string& path, const SceneOverrides& overrides) {
 std::string describeScene(const Scene& s) {
     std::ostringstream o;
     size_t tris = 0;
-    for (auto& sh : s.shapes) tris += sh.mesh.triangleCount();
+    for (auto& sh : s.shapes) tris += sh.areaLight < 0 ? sh.mesh.triangleCount() : 0;
     o << "scene: " << s.sourcePath << "\n";
     o << "image: " << s.render.width << "x" << s.render.height << ", " << s.render.spp << " spp, seed " << s.render.seed
       << ", " << (s.render.integrator == IntegratorKind::Path ? "path tracer (max depth " + std::to_string(s.render.maxDepth) + ")" : s.render.integrator == IntegratorKind::Raster ? "raster (the GPU preview's lighting, shadow maps " + std::to_string(s.render.shadowMapSize) + " texels wide)" : std::string("direct lighting"))
       << ", " << (s.render.filter == PixelFilterKind::Box ? "box" : "gaussian") << " filter\n";
     o << "camera: position (" << s.camera.position.x << ", " << s.camera.position.y << ", " << s.camera.position.z
       << "), fov " << s.camera.fovDegrees << " deg (" << (s.camera.fovIsHorizontal ? "x" : "y") << ")\n";
-    o << "shapes: " << s.shapes.size() << " (" << tris << " triangles)\n";
-    for (auto& sh : s.shapes)
-        o << "  - " << sh.name << ": " << sh.mesh.triangleCount() << " triangles"
-          << (sh.areaLight >= 0 ? ", area light" : ", material '" + s.materials[sh.material]->name() + "'") << "\n";
+    // Light geometry (quad lights) is listed with its light, not counted as a shape.
+    size_t shapeCount = 0;
+    for (auto& sh : s.shapes) shapeCount += sh.areaLight < 0;
+    o << "shapes: " << shapeCount << " (" << tris << " triangles)\n";
+    for (auto& sh : s.shapes) {
+        if (sh.areaLight >= 0) continue;
+        o << "  - " << sh.name << ": " << sh.mesh.triangleCount() << " triangles, material '"
+          << s.materials[size_t(sh.material)]->name() << "'";
+        if (!sh.meshFile.empty())
+            o << "\n      mesh " << sh.meshFile << ": " << sh.mesh.positions.size() << " vertices; normals "
+              << attributeSourceName(sh.attributes.normals) << ", uvs " << attributeSourceName(sh.attributes.uvs)
+              << ", tangents " << attributeSourceName(sh.attributes.tangents);
+        o << "\n";
+    }
     o << "materials: " << s.materials.size() << "\n";
     o << "lights: " << s.lights.size() << "\n";
-    for (auto& l : s.lights) o << "  - " << l->name << "\n";
+    for (size_t i = 0; i < s.lights.size(); ++i) {
+        o << "  - " << s.lights[i]->name;
+        for (auto& sh : s.shapes)
+            if (sh.areaLight == int(i)) o << " (" << sh.mesh.triangleCount() << " triangles of light geometry)";
+        o << "\n";
+    }
     return o.str();
 }
 

@@ -11,6 +11,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <regex>
 #include <csignal>
 #include <filesystem>
 #include <sys/wait.h>
@@ -495,4 +496,46 @@ TEST(Cli, TextureHeadersAreCheckedAndTextureFailuresGetTheDocumentedCodes) {
     EXPECT_EQ(test::runCli(sceneWith("missing.png"), &out), 1) << out;
     EXPECT_NE(out.find("missing.png"), std::string::npos) << out;
     EXPECT_FALSE(fs::exists(dir + "/out.exr"));
+}
+
+// Issue 17 item 1: `info` lists each mesh file's attributes and where they came from, counts a quad light's geometry
+// with the light (not as a shape), and the loader names the shape and node that read uvs a mesh does not have.
+TEST(Cli, InfoListsMeshAttributesAndWarnsAboutMissingUvs) {
+    std::string dir = test::tempDir("cli-mesh-info");
+    test::writeFile(dir + "/tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    test::writeFile(dir + "/tri_uv.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n");
+    test::writeFile(dir + "/s.json", R"({
+      "camera": {"position": [0, -4, 1], "look_at": [0, 0, 0]},
+      "materials": {
+        "glint": {"nodes": {"g": {"type": "bsdf.glint"}}, "output": "@g.bsdf"},
+        "aniso": {"nodes": {"g": {"type": "bsdf.ggx", "inputs": {"anisotropy": 0.6}}}, "output": "@g.bsdf"},
+        "plain": {"nodes": {"g": {"type": "bsdf.ggx"}}, "output": "@g.bsdf"}},
+      "shapes": [
+        {"type": "mesh", "file": "tri.obj", "name": "no_uv_glint", "material": "glint"},
+        {"type": "mesh", "file": "tri.obj", "name": "no_uv_aniso", "material": "aniso"},
+        {"type": "mesh", "file": "tri.obj", "name": "no_uv_plain", "material": "plain", "shading": "flat"},
+        {"type": "mesh", "file": "tri_uv.obj", "name": "with_uv", "material": "glint"},
+        {"type": "sphere", "material": "plain"}],
+      "lights": [{"type": "quad", "position": [0, 0, 3], "look_at": [0, 0, 0], "power": 100}]})");
+    std::string out;
+    ASSERT_EQ(test::runCli("info " + q(dir + "/s.json"), &out), 0) << out;
+    EXPECT_NE(out.find("shapes: 5 ("), std::string::npos) << out;
+    EXPECT_NE(out.find("mesh tri.obj: 3 vertices; normals computed, uvs none, tangents none"), std::string::npos) << out;
+    EXPECT_NE(out.find("mesh tri_uv.obj: 3 vertices; normals computed, uvs from the file, tangents computed"),
+              std::string::npos) << out;
+    EXPECT_NE(out.find("lights: 1\n  - quad (2 triangles of light geometry)"), std::string::npos) << out;
+    EXPECT_NE(out.find("/shapes/0: mesh 'tri.obj' ('no_uv_glint') has no uvs, but node 'g' (bsdf.glint)"), std::string::npos) << out;
+    EXPECT_NE(out.find("/shapes/1: mesh 'tri.obj' ('no_uv_aniso') has no uvs, but node 'g' (bsdf.ggx)"), std::string::npos) << out;
+    EXPECT_NE(out.find("(port 'anisotropy')"), std::string::npos) << out;
+    EXPECT_EQ(out.find("/shapes/2:"), std::string::npos) << "an isotropic GGX needs no uvs\n" << out;
+    EXPECT_EQ(out.find("/shapes/3:"), std::string::npos) << "the mesh has uvs\n" << out;
+    // Bad shading keys are input errors at their pointer.
+    std::string scene = test::readFile(dir + "/s.json");
+    test::writeFile(dir + "/bad.json", std::regex_replace(scene, std::regex("\"shading\": \"flat\""), "\"shading\": \"flatt\""));
+    EXPECT_EQ(test::runCli("info " + q(dir + "/bad.json"), &out), 1) << out;
+    EXPECT_NE(out.find("/shapes/2/shading"), std::string::npos) << out;
+    EXPECT_NE(out.find("'flat'"), std::string::npos) << out;
+    test::writeFile(dir + "/bad.json", std::regex_replace(scene, std::regex("\"shading\": \"flat\""), "\"smooth_angle\": 200"));
+    EXPECT_EQ(test::runCli("info " + q(dir + "/bad.json"), &out), 1) << out;
+    EXPECT_NE(out.find("/shapes/2/smooth_angle"), std::string::npos) << out;
 }

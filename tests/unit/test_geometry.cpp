@@ -935,8 +935,9 @@ TEST_F(LoaderTest, PolygonsAreFanTriangulated) {
     TriangleMesh mo = loadMesh(write("poly.obj", obj));
     EXPECT_EQ(mo.triangleCount(), 5u);
     EXPECT_NEAR(meshArea(mo), 1 + pentArea, 1e-5);
-    // No uvs: normals stay empty (flat shading) and no tangents.
-    EXPECT_TRUE(mo.normals.empty());
+    // No normals in the file: made by angle (both polygons lie in z = 0, so every normal is +z); no uvs, no tangents.
+    ASSERT_EQ(mo.normals.size(), mo.positions.size());
+    for (const Vec3& n : mo.normals) EXPECT_EQ(n, Vec3(0, 0, 1));
     EXPECT_TRUE(mo.tangents.empty());
     EXPECT_TRUE(mo.uvs.empty());
 
@@ -950,7 +951,94 @@ TEST_F(LoaderTest, PolygonsAreFanTriangulated) {
     TriangleMesh mp = loadMesh(write("poly.ply", ply.str()));
     EXPECT_EQ(mp.triangleCount(), 5u);
     EXPECT_NEAR(meshArea(mp), 1 + pentArea, 1e-5);
-    EXPECT_TRUE(mp.normals.empty());
+    ASSERT_EQ(mp.normals.size(), mp.positions.size());
+    for (const Vec3& n : mp.normals) EXPECT_EQ(n, Vec3(0, 0, 1));
+}
+
+// A unit cube without normals (8 positions, quads): auto smooth at 30 degrees keeps its 90-degree edges (24 vertices,
+// axis normals, as Blender's Smooth by Angle); "smooth" welds every corner (8 vertices, normals along the diagonals,
+// the area-weighted mean of three equal faces); "flat" gives each triangle its own normal whatever the file says.
+TEST_F(LoaderTest, MeshesWithoutNormalsAreSmoothedByAngle) {
+    const std::string cube =
+        "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
+        "f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n";
+    const std::string path = write("cube.obj", cube);
+    MeshAttributeSources src;
+    TriangleMesh autoSmooth = loadMesh(path, MeshShading{}, &src);
+    EXPECT_EQ(src.normals, MeshAttributeSources::Computed);
+    EXPECT_EQ(src.uvs, MeshAttributeSources::None);
+    EXPECT_EQ(autoSmooth.positions.size(), 24u);
+    EXPECT_EQ(autoSmooth.triangleCount(), 12u);
+    for (const auto& t : autoSmooth.indices) {
+        // Every corner of a triangle carries the triangle's outward axis normal.
+        const Vec3 c = (autoSmooth.positions[t.x] + autoSmooth.positions[t.y] + autoSmooth.positions[t.z]) / 3.f;
+        const Vec3 fn = glm::normalize(glm::cross(autoSmooth.positions[t.y] - autoSmooth.positions[t.x],
+                                                  autoSmooth.positions[t.z] - autoSmooth.positions[t.x]));
+        EXPECT_GT(glm::dot(fn, c - Vec3(0.5f)), 0.f) << "outward winding";
+        for (int k = 0; k < 3; ++k) EXPECT_LT(glm::distance(autoSmooth.normals[t[k]], fn), 1e-6f);
+    }
+    TriangleMesh smooth = loadMesh(path, MeshShading{MeshShading::Smooth, 30.f}, &src);
+    EXPECT_EQ(smooth.positions.size(), 8u);
+    for (size_t i = 0; i < smooth.positions.size(); ++i) {
+        const Vec3 diag = glm::normalize(smooth.positions[i] - Vec3(0.5f));
+        EXPECT_LT(glm::distance(smooth.normals[i], diag), 1e-6f) << i;
+    }
+    // 89 degrees still creases a cube, 91 degrees smooths it.
+    EXPECT_EQ(loadMesh(path, MeshShading{MeshShading::Auto, 89.f}).positions.size(), 24u);
+    EXPECT_EQ(loadMesh(path, MeshShading{MeshShading::Auto, 91.f}).positions.size(), 8u);
+
+    // Flat overrides the file's normals (here deliberately wrong ones): each triangle's corners get its face normal.
+    const std::string withNormals = write("cube_vn.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nvn 1 0 0\n"
+                                                          "f 1//1 2//1 3//1\nf 1//1 2//1 4//1\n");
+    TriangleMesh flat = loadMesh(withNormals, MeshShading{MeshShading::Flat, 30.f}, &src);
+    EXPECT_EQ(src.normals, MeshAttributeSources::Computed);
+    ASSERT_EQ(flat.triangleCount(), 2u);
+    EXPECT_EQ(flat.positions.size(), 6u);
+    EXPECT_LT(glm::distance(flat.normals[flat.indices[0].x], Vec3(0, 0, 1)), 1e-6f);
+    EXPECT_LT(glm::distance(flat.normals[flat.indices[1].x], Vec3(0, -1, 0)), 1e-6f);
+    TriangleMesh kept = loadMesh(withNormals, MeshShading{}, &src);
+    EXPECT_EQ(src.normals, MeshAttributeSources::File);
+    EXPECT_EQ(kept.normals[0], Vec3(1, 0, 0));
+}
+
+// A UV sphere whose neighbouring faces meet at 22.5 degrees is smooth at the default angle: its computed normals are
+// the sphere's own within the facet error, and a uv seam (the same position with u = 0 and u = 1) does not crease it.
+TEST_F(LoaderTest, AutoSmoothKeepsCurvedSurfacesSmoothAcrossUvSeams) {
+    const int nu = 16, nv = 8;
+    std::ostringstream obj;
+    for (int j = 0; j <= nv; ++j)
+        for (int i = 0; i <= nu; ++i) {  // column nu repeats column 0's positions: the seam
+            const double th = kPiD * j / nv, ph = 2 * kPiD * (i % nu) / nu;
+            const double r = j == 0 || j == nv ? 0.0 : std::sin(th);  // the poles' copies at exactly one position
+            obj << "v " << num(r * std::cos(ph)) << ' ' << num(r * std::sin(ph)) << ' ' << num(std::cos(th)) << "\nvt " << num(double(i) / nu) << ' ' << num(1.0 - double(j) / nv) << "\n";
+        }
+    for (int j = 0; j < nv; ++j)
+        for (int i = 0; i < nu; ++i) {
+            const int a = j * (nu + 1) + i + 1, b = a + 1, c = a + nu + 2, d = a + nu + 1;
+            if (j > 0) obj << "f " << a << '/' << a << ' ' << d << '/' << d << ' ' << b << '/' << b << "\n";
+            if (j < nv - 1) obj << "f " << b << '/' << b << ' ' << d << '/' << d << ' ' << c << '/' << c << "\n";
+        }
+    MeshAttributeSources src;
+    TriangleMesh m = loadMesh(write("sphere.obj", obj.str()), MeshShading{}, &src);
+    EXPECT_EQ(src.normals, MeshAttributeSources::Computed);
+    EXPECT_EQ(src.uvs, MeshAttributeSources::File);
+    EXPECT_EQ(src.tangents, MeshAttributeSources::Computed);
+    float worst = 0.f;
+    size_t worstAt = 0;
+    for (size_t i = 0; i < m.positions.size(); ++i) {
+        const float e = glm::distance(m.normals[i], glm::normalize(m.positions[i]));
+        if (e > worst) worst = e, worstAt = i;
+    }
+    EXPECT_LT(worst, 0.04f) << "computed normals against the sphere's, worst at " << m.positions[worstAt].x << ","
+                            << m.positions[worstAt].y << "," << m.positions[worstAt].z << " normal " << m.normals[worstAt].x
+                            << "," << m.normals[worstAt].y << "," << m.normals[worstAt].z;
+    // Same position, different uv (the seam, and the poles' fans): one normal.
+    for (size_t i = 0; i < m.positions.size(); ++i)
+        for (size_t k = i + 1; k < m.positions.size(); ++k)
+            if (m.positions[i] == m.positions[k]) EXPECT_EQ(m.normals[i], m.normals[k]) << i << " " << k;
+    // Flat on the same file: no two triangles of different orientation share a vertex.
+    TriangleMesh f = loadMesh(write("sphere2.obj", obj.str()), MeshShading{MeshShading::Flat, 30.f});
+    EXPECT_GT(f.positions.size(), m.positions.size());
 }
 
 TEST_F(LoaderTest, UvsWithoutNormalsGetComputedNormalsAndTangents) {

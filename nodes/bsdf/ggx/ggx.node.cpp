@@ -25,7 +25,8 @@ NodeParams<Params> declare() {
     NodeParams<Params> l;
     l.c3("weight", &Params::weight, Vec3(1.f), "tint / layer weight").range(0.f, 1.f).soft(0.f, 1.f).hard(0.f, 1e6f)
         .f("roughness", &Params::roughness, 0.5f, "perceptual roughness, α = roughness²").range(0.f, 1.f).hard(0.f, 1.f)
-        .f("anisotropy", &Params::anisotropy, 0.f, "0 = isotropic; stretches α along the tangent").range(0.f, 1.f).hard(0.f, 1.f);
+        .f("anisotropy", &Params::anisotropy, 0.f, "0 = isotropic; stretches α along the tangent").range(0.f, 1.f).hard(0.f, 1.f)
+        .orientsByTangent();
     fresnelPorts(l);
     l.n3("normal", &Params::normal, Vec3(0, 0, 1), "shading normal (e.g. from texture.normal_map)").bind(GeomBinding::N)
         .v3("tangent", &Params::tangent, Vec3(1, 0, 0), "tangent: direction of αx").bind(GeomBinding::T);

@@ -21,6 +21,7 @@ void reg(NodeRegistry& r) {
     s.category = "geometry";
     s.doc = "Mesh tangent T (world) and the bitangent sign.";
     s.outputs = kOutputs.ports();
+    s.flags = kReadsUv;  // the tangent of a mesh is made from its uvs
     s.cpu = &cpu;
     s.glslFunction = "spc_geometry_tangent";
     s.glslFile = "geometry/tangent/tangent.glsl";

@@ -32,7 +32,7 @@ void reg(NodeRegistry& r) {
             "(a pixel step scaled by max(1/8, 1/sqrt(spp)) on the CPU, for texture filtering), pixel_duvdx/pixel_duvdy "
             "one whole pixel step at any spp (on a GPU both are dFdx/dFdy).";
     s.outputs = kOutputs.ports();
-    s.flags = kNeedsDerivatives;
+    s.flags = kNeedsDerivatives | kReadsUv;
     s.cpu = &cpu;
     s.glslFunction = "spc_geometry_uv";
     s.glslFile = "geometry/uv/uv.glsl";
