@@ -19,11 +19,13 @@
 #include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <cstdint>
 #include <cstdlib>
 #include <filesystem>
 #include <map>
 #include <memory>
 #include <set>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -238,6 +240,246 @@ const std::map<std::string, std::string>& nodeNotes() {
     return notes;
 }
 
+// ---- paste-able example materials -----------------------------------------------------------------
+// Every node's section ends with a complete material ({"nodes": {...}, "output": "@x.bsdf"}) built from the
+// registry: the node with every input a user can set (ports without a geometric binding) at its default, required
+// closure inputs fed by default BSDFs, and a non-closure output wired into a BSDF input of its type. The only
+// fixed data are below: the repository file a file port names, a few feeders (a normal map for texture.normal_map,
+// LEAN moments for bsdf.beckmann_lean) and the BSDF each output type goes to. tests/docs/test_doc_examples.py loads
+// every example, so a renamed port or node breaks the test, not a reader's paste.
+
+// A file input of an example: a normal map in this repository (256x256), and a 128x128 one for bsdf.ltc_normal_map,
+// which fits its prefiltered LTCs on load (about four times longer per doubling of the size: seconds at 128x128).
+const char* const kExampleNormalMap = "examples/lean/bumps.png";
+const char* const kExampleSmallNormalMap = "examples/showcase/stone128.png";
+
+std::string exampleFile(const NodeSpec& s) {
+    return s.id == "bsdf.ltc_normal_map" ? kExampleSmallNormalMap : kExampleNormalMap;
+}
+
+// One step of a chain from a node's output into a BSDF: node type, the input the previous value enters ("": the
+// step's first input of that type), fixed literal inputs (JSON text), and further inputs taken from other outputs of
+// the featured node.
+struct ExampleStep {
+    std::string type, input;
+    std::vector<std::pair<std::string, std::string>> literals;
+    std::vector<std::pair<std::string, std::string>> fromFeatured;  // (input, output of the featured node)
+};
+
+// Where a non-closure output goes, by type: a BSDF input of that type (through a converter where no BSDF has one).
+std::vector<ExampleStep> sinkForType(TypeDesc t) {
+    switch (t) {
+        case TypeDesc::Color3: return {{"bsdf.diffuse", "color", {}, {}}};
+        case TypeDesc::Float: return {{"bsdf.ggx", "roughness", {}, {}}};
+        case TypeDesc::Normal3: return {{"bsdf.ggx", "normal", {}, {}}};
+        case TypeDesc::Vector3: return {{"convert.vector3_to_color3", "", {}, {}}, {"bsdf.diffuse", "color", {}, {}}};
+        case TypeDesc::Vec2: return {{"math.length.vec2", "", {}, {}}, {"bsdf.ggx", "roughness", {}, {}}};
+        default: return {};
+    }
+}
+
+// Nodes whose output has a more telling destination than the by-type default.
+std::vector<ExampleStep> sinkFor(const NodeSpec& s, TypeDesc t) {
+    if (s.category == "fresnel") {  // a Fresnel term weights a specular lobe whose own Fresnel is off
+        ExampleStep ggx{"bsdf.ggx", "weight", {{"fresnel", "\"none\""}}, {}};
+        if (t == TypeDesc::Float) return {{"convert.float_to_color3", "", {}, {}}, ggx};
+        return {ggx};
+    }
+    if (s.id == "texture.image")  // the repository's images are normal maps
+        return {{"texture.normal_map", "color", {}, {}}, {"bsdf.ggx", "normal", {}, {}}};
+    if (s.id == "texture.lean")
+        return {{"bsdf.beckmann_lean", "slope", {}, {{"covariance", "covariance"}}}};
+    return sinkForType(t);
+}
+
+// Inputs of the featured node fed by another node: (featured id, input) -> (node type, its output, its inputs).
+struct ExampleFeed {
+    std::string type, output;
+    std::vector<std::pair<std::string, std::string>> literals;
+};
+const std::map<std::pair<std::string, std::string>, ExampleFeed>& exampleFeeds() {
+    static const std::string map = std::string("\"") + kExampleNormalMap + "\"";
+    static const std::map<std::pair<std::string, std::string>, ExampleFeed> feeds = {
+        {{"texture.normal_map", "color"}, {"texture.image", "color", {{"file", map}, {"colorspace", "\"raw\""}}}},
+        {{"texture.normal_map", "dcolor_du"}, {"texture.image", "dcolor_du", {{"file", map}, {"colorspace", "\"raw\""}}}},
+        {{"texture.normal_map", "dcolor_dv"}, {"texture.image", "dcolor_dv", {{"file", map}, {"colorspace", "\"raw\""}}}},
+        {{"bsdf.beckmann_lean", "slope"}, {"texture.lean", "slope", {{"file", map}}}},
+        {{"bsdf.beckmann_lean", "covariance"}, {"texture.lean", "covariance", {{"file", map}}}},
+    };
+    return feeds;
+}
+
+// JSON text of a port's default literal: a number, an array of the port's width, or a string.
+std::string defaultJson(const PortSpec& p) {
+    if (p.type == TypeDesc::String) return ojson(p.defString).dump();
+    int w = typeWidth(p.type);
+    if (w == 1) return num(p.def[0]);
+    std::string s = "[";
+    for (int k = 0; k < w; ++k) s += (k ? ", " : "") + num(p.def[size_t(k)]);
+    return s + "]";
+}
+
+struct ExampleNode {
+    std::string key, type;
+    std::vector<std::pair<std::string, std::string>> inputs;  // port -> JSON text
+};
+
+struct ExampleGraph {
+    std::vector<ExampleNode> nodes;
+    std::set<std::string> keys;
+    // A short node key from the type ("bsdf.ggx" -> "ggx", "math.add.float" -> "add"), unique in the graph.
+    size_t add(const std::string& type) {
+        size_t a = type.find('.');
+        std::string base = a == std::string::npos ? type : type.substr(a + 1);
+        size_t b = base.find('.');
+        if (b != std::string::npos) base = base.substr(0, b);
+        std::string key = base;
+        for (int k = 2; keys.count(key); ++k) key = base + std::to_string(k);
+        keys.insert(key);
+        nodes.push_back({key, type, {}});
+        return nodes.size() - 1;
+    }
+    // Input `port` of node i; replaces a value set before (a feeder overrides a default).
+    void set(size_t i, const std::string& port, const std::string& value) {
+        for (auto& in : nodes[i].inputs)
+            if (in.first == port) {
+                in.second = value;
+                return;
+            }
+        nodes[i].inputs.push_back({port, value});
+    }
+};
+
+[[noreturn]] void exampleError(const NodeSpec& s, const std::string& what) {
+    throw std::logic_error("docs example of " + s.id + ": " + what + " (plugin/cli/nodes_command.cpp)");
+}
+
+const PortSpec* findInput(const NodeSpec& s, const std::string& name) {
+    for (auto& p : s.inputs)
+        if (p.name == name) return &p;
+    return nullptr;
+}
+
+const NodeSpec& requireSpec(const NodeSpec& featured, const std::string& id) {
+    const NodeSpec* s = NodeRegistry::instance().find(id);
+    if (!s) exampleError(featured, "no node " + id);
+    return *s;
+}
+
+// The example material of one node as pretty JSON text (one line per node; long input lists wrap).
+std::string exampleMaterial(const NodeSpec& s) {
+    ExampleGraph g;
+    size_t self = g.add(s.id);
+    const std::string selfKey = g.nodes[self].key;
+    int closures = 0;
+    std::vector<std::pair<std::string, std::string>> closureInputs;
+    for (auto& p : s.inputs) {
+        auto feed = exampleFeeds().find({s.id, p.name});
+        if (feed != exampleFeeds().end()) {
+            const NodeSpec& fs = requireSpec(s, feed->second.type);
+            size_t f = SIZE_MAX;  // one feeder node per type serves several inputs (texture.lean slope + covariance)
+            for (size_t i = 0; i < g.nodes.size(); ++i)
+                if (g.nodes[i].type == fs.id) f = i;
+            if (f == SIZE_MAX) {
+                f = g.add(fs.id);
+                for (auto& l : feed->second.literals) g.set(f, l.first, l.second);
+            }
+            g.set(self, p.name, "\"@" + g.nodes[f].key + "." + feed->second.output + "\"");
+            continue;
+        }
+        if (p.type == TypeDesc::Closure) {
+            // Closure inputs: a diffuse base first, then a glossy one (closure.add/mix: diffuse + ggx).
+            const char* type = closures++ == 0 ? "bsdf.diffuse" : "bsdf.ggx";
+            size_t c = g.add(type);
+            g.set(self, p.name, "\"@" + g.nodes[c].key + ".bsdf\"");
+            continue;
+        }
+        if (p.binding != GeomBinding::None) continue;  // geometry: leave unconnected
+        if (p.type == TypeDesc::String && p.enumValues.empty() && p.defString.empty()) {
+            // required plain strings: a colorspace, or a file
+            g.set(self, p.name, p.name == "colorspace" ? "\"raw\"" : ojson(exampleFile(s)).dump());
+            continue;
+        }
+        g.set(self, p.name, defaultJson(p));
+    }
+
+    std::string output;
+    const PortSpec* closureOut = nullptr;
+    for (auto& o : s.outputs)
+        if (o.type == TypeDesc::Closure) {
+            closureOut = &o;
+            break;
+        }
+    if (closureOut) {
+        output = "@" + selfKey + "." + closureOut->name;
+    } else {
+        if (s.outputs.empty()) exampleError(s, "no output");
+        // The first output, except where the chain below takes another one (texture.lean: its slope moments).
+        const PortSpec* outp = &s.outputs.front();
+        for (auto& o : s.outputs)
+            if (s.id == "texture.lean" && o.name == "slope") outp = &o;
+        const PortSpec& out = *outp;
+        std::vector<ExampleStep> chain = sinkFor(s, out.type);
+        if (chain.empty()) exampleError(s, std::string("no BSDF input for type ") + typeName(out.type));
+        std::string ref = "@" + selfKey + "." + out.name;
+        TypeDesc t = out.type;
+        for (auto& step : chain) {
+            const NodeSpec& ss = requireSpec(s, step.type);
+            const PortSpec* in = nullptr;
+            for (auto& p : ss.inputs)
+                if (step.input.empty() ? p.type == t && p.binding == GeomBinding::None : p.name == step.input) {
+                    in = &p;
+                    break;
+                }
+            if (!in || in->type != t) exampleError(s, step.type + " has no " + typeName(t) + " input " + step.input);
+            size_t k = g.add(ss.id);
+            for (auto& l : step.literals) g.set(k, l.first, l.second);
+            g.set(k, in->name, "\"" + ref + "\"");
+            for (auto& f : step.fromFeatured) g.set(k, f.first, "\"@" + selfKey + "." + f.second + "\"");
+            if (ss.outputs.empty()) exampleError(s, step.type + " has no output");
+            ref = "@" + g.nodes[k].key + "." + ss.outputs.front().name;
+            t = ss.outputs.front().type;
+        }
+        if (t != TypeDesc::Closure) exampleError(s, "the chain does not end in a closure");
+        output = ref;
+    }
+
+    // Layout: "key": { "type": ..., "inputs": { ... } } on one line when it fits in 118 columns, else the inputs
+    // wrap, several per line.
+    const size_t kWidth = 118;
+    size_t keyWidth = 0;
+    for (auto& n : g.nodes) keyWidth = std::max(keyWidth, n.key.size());
+    std::string text = "{\n  \"nodes\": {\n";
+    for (size_t i = 0; i < g.nodes.size(); ++i) {
+        const ExampleNode& n = g.nodes[i];
+        std::string head = "    " + ojson(n.key).dump() + ":" + std::string(keyWidth - n.key.size() + 1, ' ') +
+                           "{ \"type\": " + ojson(n.type).dump();
+        std::vector<std::string> items;
+        for (auto& in : n.inputs) items.push_back(ojson(in.first).dump() + ": " + in.second);
+        std::string tail = i + 1 < g.nodes.size() ? " },\n" : " }\n";
+        std::string line = head;
+        if (!items.empty()) line += ", \"inputs\": { " + join(items, ", ") + " }";
+        if (line.size() + tail.size() - 1 <= kWidth) {
+            text += line + tail;
+            continue;
+        }
+        text += head + ", \"inputs\": {\n";
+        const std::string indent = "      ";
+        std::string cur = indent;
+        for (size_t k = 0; k < items.size(); ++k) {
+            std::string item = items[k] + (k + 1 < items.size() ? "," : "");
+            if (cur.size() > indent.size() && cur.size() + 1 + item.size() > kWidth) {
+                text += cur + "\n";
+                cur = indent;
+            }
+            cur += (cur.size() > indent.size() ? " " : "") + item;
+        }
+        text += cur + "\n    }" + tail;
+    }
+    text += "  },\n  \"output\": " + ojson(output).dump() + "\n}\n";
+    return text;
+}
+
 std::string pageHeader(size_t nodeCount, size_t categoryCount) {
     std::string h;
     h += "# Node reference\n\n";
@@ -275,6 +517,19 @@ std::string pageHeader(size_t nodeCount, size_t categoryCount) {
          "read\nscreen-space differentials (CPU ray differentials, GLSL `dFdx/dFdy`); **emissive** nodes can produce "
          "emission.\n\n";
 
+    h += "## Examples\n\n";
+    h += "Every node's section ends with a complete material that uses it, generated from the registry like the rest of "
+         "the\npage: paste it as the value of an entry of a scene's `\"materials\"` object, or save it as "
+         "`{\"materials\": {\"m\": ...}}` for\n`specula bsdf`, `specula glsl` and `specula plot`. Every input "
+         "without a geometric binding is listed at its default,\nso an example also spells each port; closure inputs "
+         "are fed by `bsdf.diffuse` and `bsdf.ggx`, and a node without a\nclosure output feeds a BSDF input of its "
+         "output's type (through a `convert.*` or `math.*` node where no BSDF has\none). File inputs name normal maps in this repository: `";
+    h += kExampleNormalMap;
+    h += "`, and for\n`bsdf.ltc_normal_map`, which prefilters its map on load, the smaller `";
+    h += kExampleSmallNormalMap;
+    h += "`. File paths are\nrelative to the scene file, so as written the examples load from a file in the "
+         "repository's root; elsewhere, change\nthe path. "
+         "`tests/docs/test_doc_examples.py` (ctest `doc_examples`) loads every example of the documentation.\n\n";
     h += "## CPU/GLSL parity\n\n";
     h += "ctest label `glsl`, `tests/glsl/test_glsl_parity.cpp`: per node, 1024 random input sets (inside each port's\n"
          "documented range; uniform ports at their default, as one material has one value; normals/tangents random\n"
@@ -373,6 +628,11 @@ std::string nodeMarkdown(const NodeSpec& s) {
         for (auto& p : s.outputs) m += row({code(cell(p.name)), typeName(p.type), cell(p.doc)});
         m += "\n";
     }
+    const std::string example = exampleMaterial(s);
+    m += example.find("\"examples/") != std::string::npos
+             ? "Example (a complete material; the file path is relative to the repository root, see [Examples](#examples)):"
+             : "Example (a complete material, see [Examples](#examples)):";
+    m += "\n\n```json\n" + example + "```\n\n";
     return m;
 }
 
