@@ -3,6 +3,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cctype>
 #include <cstdio>
 #include <filesystem>
 #include <stdexcept>
@@ -11,41 +12,58 @@ namespace fs = std::filesystem;
 
 namespace specula {
 
-std::string writeRenderOutputs(const std::string& exrPath, const Scene& scene, const ImageSet& images) {
-    // Both files are written to temporaries first and renamed only once both exist: a PNG that cannot be written
+namespace {
+std::string lowerExtension(const std::string& path) {
+    std::string ext = fs::path(path).extension().string();
+    for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+    return ext;
+}
+}  // namespace
+
+bool isPngOutput(const std::string& outPath) { return lowerExtension(outPath) == ".png"; }
+
+WrittenFiles writeRenderOutputs(const std::string& outPath, const Scene& scene, const ImageSet& images) {
+    // Every file is written to a temporary first and renamed only once all exist: a PNG that cannot be written
     // (a full disk, a folder in its place) must not leave a new EXR over the old one (issue 16).
-    std::string png = fs::path(exrPath).replace_extension(".png").string();
+    WrittenFiles w;
+    const bool pngOnly = isPngOutput(outPath);
+    w.exr = pngOnly ? std::string() : outPath;
+    w.png = pngOnly ? outPath : fs::path(outPath).replace_extension(".png").string();
     // A rename onto a folder fails: find that before either file is committed.
-    for (const std::string& target : {exrPath, png})
-        if (fs::is_directory(target)) throw ImageIoError("cannot write '" + target + "': a folder has that name");
-    std::string tmpExr = createTempFileNear(exrPath), tmpPng;
+    for (const std::string& target : {w.exr, w.png})
+        if (!target.empty() && fs::is_directory(target))
+            throw ImageIoError("cannot write '" + target + "': a folder has that name");
+    std::string tmpExr, tmpPng;
     auto removeTemporaries = [&] {
         std::error_code ec;
-        fs::remove(tmpExr, ec);
+        if (!tmpExr.empty()) fs::remove(tmpExr, ec);
         if (!tmpPng.empty()) fs::remove(tmpPng, ec);
     };
     try {
-        writeExr(tmpExr, images, *scene.colorConfig);
-        tmpPng = createTempFileNear(png);
+        if (!pngOnly) {
+            tmpExr = createTempFileNear(w.exr);
+            writeExr(tmpExr, images, *scene.colorConfig);
+        }
+        tmpPng = createTempFileNear(w.png);
         writePng(tmpPng, images, *scene.colorConfig, scene.color.view, scene.color.exposure);
     } catch (const ImageIoError& e) {
         removeTemporaries();
         // The temporaries' names mean nothing to the user: name the file that was asked for.
         std::string msg = e.what();
-        for (auto [tmp, real] : {std::pair{tmpExr, exrPath}, std::pair{tmpPng, png}})
+        for (auto [tmp, real] : {std::pair{tmpExr, w.exr}, std::pair{tmpPng, w.png}})
             for (size_t at; !tmp.empty() && (at = msg.find(tmp)) != std::string::npos;) msg.replace(at, tmp.size(), real);
         throw ImageIoError(msg);
     } catch (...) {
         removeTemporaries();
         throw;
     }
-    commitTempFile(tmpExr, exrPath);
-    commitTempFile(tmpPng, png);
-    return png;
+    if (!pngOnly) commitTempFile(tmpExr, w.exr);
+    commitTempFile(tmpPng, w.png);
+    return w;
 }
 
-std::string partialOutputPath(const std::string& exrPath) {
-    return fs::path(exrPath).replace_extension(".partial.exr").string();
+std::string partialOutputPath(const std::string& outPath) {
+    return fs::path(outPath).replace_extension(".partial.exr").string();
 }
 
 namespace {
@@ -66,8 +84,10 @@ void refuseOverwritingInput(const std::string& output, const std::vector<std::st
 }
 
 void checkOutputPath(const std::string& exrPath, const std::string& inputPath) {
-    if (fs::path(exrPath).extension() != ".exr")
-        throw Error(ErrorCode::Usage, "", "output '" + exrPath + "' must end in .exr (a PNG is written beside it)");
+    const std::string ext = lowerExtension(exrPath);
+    if (ext != ".exr" && ext != ".png")
+        throw Error(ErrorCode::Usage, "", "output '" + exrPath + "' must end in .exr (every AOV, and the viewed PNG beside "
+                                          "it) or .png (the viewed image only)");
     if (!inputPath.empty()) {
         for (const std::string& out : {exrPath, fs::path(exrPath).replace_extension(".png").string(), partialOutputPath(exrPath)})
             if (samePath(out, inputPath))
@@ -88,9 +108,7 @@ WrittenFiles writeRenderResult(const std::string& exrPath, const Scene& scene, I
         writeExr(w.exr, images, *scene.colorConfig);
         return w;
     }
-    w.exr = exrPath;
-    w.png = writeRenderOutputs(exrPath, scene, images);
-    return w;
+    return writeRenderOutputs(exrPath, scene, images);
 }
 
 int exitCodeFor(const std::exception& e) {
@@ -125,7 +143,8 @@ std::string doneEventJson(const RenderStats& st, const std::string& exrPath, con
                   "{\"event\":\"done\",\"seconds\":%.3f,\"samples\":%llu,\"invalid_samples\":%llu,"
                   "\"samples_per_second\":%.1f,",
                   st.seconds, (unsigned long long)st.samples, (unsigned long long)st.invalidSamples, sps);
-    return buf + std::string("\"exr\":") + jsonString(exrPath) + ",\"png\":" + jsonString(pngPath) + "}";
+    return buf + std::string("\"exr\":") + (exrPath.empty() ? std::string("null") : jsonString(exrPath)) +
+           ",\"png\":" + jsonString(pngPath) + "}";
 }
 
 }  // namespace specula

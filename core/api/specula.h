@@ -16,29 +16,30 @@
 
 namespace specula {
 
-// Writes OUT.exr (all AOVs) and the OCIO-viewed PNG next to it (same stem), both atomically.
-// Returns the PNG path.
-std::string writeRenderOutputs(const std::string& exrPath, const Scene& scene, const ImageSet& images);
+struct WrittenFiles {
+    std::string exr, png;  // exr empty for a PNG-only output, png empty for a partial image
+    bool partial = false;
+};
 
-// OUT.exr -> OUT.partial.exr.
-std::string partialOutputPath(const std::string& exrPath);
+// OUT.exr: writes every AOV there and the OCIO-viewed PNG next to it (same stem); OUT.png: only the viewed PNG.
+// Atomic: the files appear whole, together, or not at all.
+WrittenFiles writeRenderOutputs(const std::string& outPath, const Scene& scene, const ImageSet& images);
+bool isPngOutput(const std::string& outPath);  // ends in .png (any case)
 
-// Checks an output path before rendering: Error(Usage) unless it ends in .exr, Error(Usage) if it (or its
+// OUT.exr or OUT.png -> OUT.partial.exr (a cancelled render keeps every AOV, whatever the output asked for).
+std::string partialOutputPath(const std::string& outPath);
+
+// Checks an output path before rendering: Error(Usage) unless it ends in .exr or .png, Error(Usage) if it (or its
 // PNG) is the input scene file 'inputPath' (never clobber the input), Error(Io) if its folder is missing.
-// The messages are the CLI's ("output 'x' must end in .exr (a PNG is written beside it)", ...).
+// The messages are the CLI's ("output 'x' must end in .exr (...) or .png (...)", ...).
 void checkOutputPath(const std::string& exrPath, const std::string& inputPath = "");
 
 // No command writes over its own input: Error(Usage) "<option> 'out' is the input file 'in'" if 'output' names the
 // same file as one of 'inputs' (after resolving links and relative paths; missing files never match).
 void refuseOverwritingInput(const std::string& output, const std::vector<std::string>& inputs, const std::string& option);
 
-struct WrittenFiles {
-    std::string exr, png;  // png empty for a partial image
-    bool partial = false;
-};
-
-// The output policy of a finished or cancelled render: complete -> OUT.exr + OUT.png (atomic, each file
-// appears whole or not at all); cancelled -> only OUT.partial.exr with metadata specula:partial = "true",
+// The output policy of a finished or cancelled render: complete -> OUT.exr + OUT.png, or OUT.png alone
+// (writeRenderOutputs); cancelled -> only OUT.partial.exr with metadata specula:partial = "true",
 // OUT.exr untouched. Throws IoError / ImageIoError.
 WrittenFiles writeRenderResult(const std::string& exrPath, const Scene& scene, ImageSet& images, const RenderStats& stats);
 

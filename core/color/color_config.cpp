@@ -192,6 +192,8 @@ std::string ColorConfig::defaultView() const { return impl_->view; }
 const std::string& ColorConfig::configPath() const { return impl_->path; }
 const std::string& ColorConfig::cacheId() const { return impl_->cacheId; }
 
+std::vector<std::string> ColorConfig::acceptedColorspaceNames() const { return impl_->allColorspaceNames(); }
+
 std::vector<std::string> ColorConfig::colorspaces() const {
     std::vector<std::string> out;
     auto& cfg = impl_->config;

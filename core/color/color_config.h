@@ -27,6 +27,8 @@ public:
     std::vector<std::string> colorspaces() const;
     std::vector<std::string> views(const std::string& display = "") const;
     bool hasColorspace(const std::string& name) const;  // also accepts aliases/roles
+    // Every name a scene may give as a colorspace: names, aliases, roles and "raw" (docs/scene-format.md lists them).
+    std::vector<std::string> acceptedColorspaceNames() const;
     bool hasView(const std::string& view) const;        // on the default display
 
     const std::string& configPath() const;  // the .ocio file that was loaded

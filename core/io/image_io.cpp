@@ -5,6 +5,7 @@
 #include "core/color/color_config.h"
 #include "core/util/error.h"
 
+#include <glm/gtc/type_ptr.hpp>
 #include <OpenImageIO/imagebuf.h>
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/imageio.h>
@@ -194,6 +195,11 @@ void writeExr(const std::string& path, const ImageSet& images, const ColorConfig
     spec.z_channel = -1;
     spec.attribute("compression", "zip");
     for (const auto& [k, v] : images.metadata) spec.attribute(k, v);
+    // glm's column-major storage of M is the row-major storage of M's transpose: Imath's row-vector matrix.
+    // OpenImageIO's names for the standard ones are "worldtocamera" and "worldtoNDC" (its "worldtoscreen" is another).
+    for (const auto& [k, m] : images.matrices)
+        spec.attribute(k == "worldToCamera" ? "worldtocamera" : k == "worldToNDC" ? "worldtoNDC" : k, OIIO::TypeMatrix44,
+                       glm::value_ptr(m));
     spec.attribute("oiio:ColorSpace", color.workingSpace());
     spec.attribute(kColorSpaceAttr, color.workingSpace());
     bool commaFree = std::none_of(names.begin(), names.end(), [](const std::string& n) {
@@ -304,6 +310,12 @@ ImageSet readImageSet(const std::string& path) {
             set.width = spec.width;
             set.height = spec.height;
             for (const auto& p : spec.extra_attribs) {
+                if (p.type() == OIIO::TypeMatrix44) {
+                    Mat4 m;
+                    std::memcpy(glm::value_ptr(m), p.data(), sizeof m);
+                    set.matrices[p.name().string()] = m;
+                    continue;
+                }
                 if (p.type() != OIIO::TypeString) continue;
                 std::string key = p.name().string();
                 if (key == kChannelOrderAttr) {
@@ -519,11 +531,44 @@ CompareResult compareImages(const std::string& pathA, const std::string& pathB, 
     const AovBuffer* b = B.find(aov);
     if (!a) throw ImageIoError("compare: AOV '" + aov + "' not in '" + pathA + "'; available: " + joinNames(aovNames(A)));
     if (!b) throw ImageIoError("compare: AOV '" + aov + "' not in '" + pathB + "'; available: " + joinNames(aovNames(B)));
-    if (A.width != B.width || A.height != B.height || a->channels() != b->channels()) {
+    if (A.width != B.width || A.height != B.height) {
         std::ostringstream ss;
         ss << "compare: size mismatch for AOV '" << aov << "': '" << pathA << "' is " << A.width << "x" << A.height
-           << "x" << a->channels() << ", '" << pathB << "' is " << B.width << "x" << B.height << "x" << b->channels();
+           << ", '" << pathB << "' is " << B.width << "x" << B.height;
         throw ImageIoError(ss.str());
+    }
+    // Channels by name: an RGBA image against an RGB one compares R, G and B and says that A was left out.
+    std::vector<std::string> compared, ignored;
+    std::vector<std::pair<int, int>> pairs;
+    for (int i = 0; i < a->channels(); ++i) {
+        auto it = std::find(b->channelNames.begin(), b->channelNames.end(), a->channelNames[size_t(i)]);
+        if (it == b->channelNames.end()) {
+            ignored.push_back(a->channelNames[size_t(i)] + " (only in '" + pathA + "')");
+            continue;
+        }
+        compared.push_back(a->channelNames[size_t(i)]);
+        pairs.emplace_back(i, int(it - b->channelNames.begin()));
+    }
+    for (const std::string& n : b->channelNames)
+        if (std::find(a->channelNames.begin(), a->channelNames.end(), n) == a->channelNames.end())
+            ignored.push_back(n + " (only in '" + pathB + "')");
+    if (pairs.empty())
+        throw ImageIoError("compare: AOV '" + aov + "' has no channel in common: '" + pathA + "' has " +
+                           joinNames(a->channelNames) + ", '" + pathB + "' has " + joinNames(b->channelNames));
+    AovBuffer commonA, commonB;
+    if (!ignored.empty() || a->channelNames != b->channelNames) {
+        const size_t npix = size_t(A.width) * size_t(A.height);
+        for (auto [buf, src, pick] : {std::tuple{&commonA, a, 0}, std::tuple{&commonB, b, 1}}) {
+            buf->name = aov;
+            buf->channelNames = compared;
+            buf->pixels.resize(npix * pairs.size());
+            for (size_t px = 0; px < npix; ++px)
+                for (size_t k = 0; k < pairs.size(); ++k)
+                    buf->pixels[px * pairs.size() + k] =
+                        src->pixels[px * size_t(src->channels()) + size_t(pick ? pairs[k].second : pairs[k].first)];
+        }
+        a = &commonA;
+        b = &commonB;
     }
 
     const int w = A.width, h = A.height, c = a->channels();
@@ -550,6 +595,8 @@ CompareResult compareImages(const std::string& pathA, const std::string& pathB, 
     r.width = w;
     r.height = h;
     r.channels = c;
+    r.compared = compared;
+    r.ignored = ignored;
     r.rmse = cr.rms_error;
     r.mae = cr.meanerror;
     // PSNR against the reference's own peak (its largest value in the compared AOV), not 1.0: scene-linear HDR data

@@ -2,6 +2,8 @@
 // all written atomically (temp file + rename); RMSE/MAE/PSNR comparison with a false-colour diff map.
 #pragma once
 
+#include "core/math/math.h"
+
 #include <map>
 #include <stdexcept>
 #include <string>
@@ -30,6 +32,9 @@ struct ImageSet {
     int width = 0, height = 0;
     std::vector<AovBuffer> aovs;                 // the first must be "beauty"
     std::map<std::string, std::string> metadata;  // extra string attributes (e.g. "specula:spp")
+    // 4x4 matrix attributes by their OpenEXR names, OpenEXR's standard "worldToCamera" and "worldToNDC" among them
+    // (column-vector convention here; the file holds Imath's row-vector matrices).
+    std::map<std::string, Mat4> matrices;
     const AovBuffer* find(const std::string& name) const;
 };
 
@@ -52,11 +57,15 @@ struct CompareResult {
     double peak = 1;                     // PSNR's peak: the reference's (b's) largest value, 1 if it has none > 0
     double meanA = 0, meanB = 0;
     int width = 0, height = 0, channels = 0;
+    // The channels compared: those both images' AOVs have (an RGBA image against an RGB one compares R, G, B), and
+    // those only one has, left out (with the file that has them), e.g. "A (only in 'a.exr')".
+    std::vector<std::string> compared, ignored;
 };
 
 // Compares AOV 'aov' of two images with OpenImageIO's ImageBufAlgo (compare/computePixelStats).
 // PSNR = 20 log10(peak / RMSE) with the reference's (b's) peak value. If diffPng is non-empty, writes a false-colour |A-B| map with a colour bar.
-// Throws ImageIoError on missing files, missing AOV or size mismatch (message names both).
+// Channels are matched by name: only the common ones are compared (CompareResult::ignored lists the others).
+// Throws ImageIoError on missing files, a missing AOV, a size mismatch or no common channel (message names both).
 CompareResult compareImages(const std::string& pathA, const std::string& pathB, const std::string& aov = "beauty",
                             const std::string& diffPng = "");
 
@@ -67,6 +76,14 @@ void writeFileAtomic(const std::string& path, const std::string& bytes);
 // extension (e.g. `specula plot`), with an optional ImageDescription. Throws IoError.
 void writeImage8(const std::string& path, int width, int height, int channels, const float* pixels,
                  const std::string& description = "");
+
+// Text for figures (`specula plot`'s titles, axes and colour bars): draws UTF-8 'text' into an RGB float image of
+// width*height pixels (rows top to bottom) with OpenImageIO's FreeType renderer and the DejaVu Sans font (Debian's
+// fonts-dejavu-core; SPECULA_FONT names another .ttf). (x, y) is the text's top edge at its left end, centre or right
+// end for alignX -1, 0 or 1; 'vertical' turns the text a quarter to the left (reading upwards), with (x, y) then
+// its left edge at its bottom, centre or top end. Returns false when no font is found.
+bool drawText(float* rgb, int width, int height, int x, int y, const std::string& text, int pixelSize,
+              const Vec3& color, int alignX = -1, bool vertical = false);
 
 // Building blocks of the atomic writes above, for other writers (e.g. the texture cache):
 // creates a unique empty file ".<stem>.tmp-XXXXXX<ext>" next to 'path' and returns its path

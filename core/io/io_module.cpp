@@ -71,6 +71,10 @@ void writeImage8(const std::string& path, int width, int height, int channels, c
                  const std::string& description) {
     table().writeImage8(path, width, height, channels, pixels, description);
 }
+bool drawText(float* rgb, int width, int height, int x, int y, const std::string& text, int pixelSize,
+              const Vec3& color, int alignX, bool vertical) {
+    return table().drawText(rgb, width, height, x, y, text, pixelSize, color, alignX, vertical);
+}
 
 // ---- core/texture/texture_store.h: the module's TextureStore is created on the first load() ----------
 struct TextureStore::Impl {

@@ -15,7 +15,7 @@
 
 namespace specula::io_module {
 
-constexpr int kAbiVersion = 1;
+constexpr int kAbiVersion = 2;
 
 struct Table {
     int abiVersion = kAbiVersion;
@@ -29,6 +29,7 @@ struct Table {
     std::string (*createTempFileNear)(const std::string&);
     void (*commitTempFile)(const std::string&, const std::string&);
     void (*writeImage8)(const std::string&, int, int, int, const float*, const std::string&);
+    bool (*drawText)(float*, int, int, int, int, const std::string&, int, const Vec3&, int, bool);
     // core/texture/texture_store.h (on the module's own TextureStore objects)
     TextureStore* (*textureCreate)(std::shared_ptr<const ColorConfig>);
     void (*textureDestroy)(TextureStore*);

@@ -5,7 +5,12 @@
 
 #include "core/util/error.h"
 
+#include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/imageio.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
 
 namespace specula {
 
@@ -18,6 +23,51 @@ void writeImage8(const std::string& path, int width, int height, int channels, c
     if (!description.empty()) spec.attribute("ImageDescription", description);
     if (!out->open(path, spec) || !out->write_image(OIIO::TypeDesc::FLOAT, pixels) || !out->close())
         throw IoError("cannot write '" + path + "': " + out->geterror());
+}
+
+namespace {
+const std::string& fontPath() {
+    static const std::string path = [] {
+        std::error_code ec;
+        const char* env = std::getenv("SPECULA_FONT");
+        for (const std::string& p : {std::string(env ? env : ""), std::string("/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf")})
+            if (!p.empty() && std::filesystem::is_regular_file(p, ec)) return p;
+        return std::string();
+    }();
+    return path;
+}
+}  // namespace
+
+bool drawText(float* rgb, int width, int height, int x, int y, const std::string& text, int pixelSize,
+              const Vec3& color, int alignX, bool vertical) {
+    if (fontPath().empty()) return false;
+    // The text is drawn white on black into its own buffer and composited with it as coverage, so that it can be
+    // turned for a vertical axis and keeps the figure's colours under its anti-aliased edges.
+    // text_size is relative to the baseline's start (its ybegin is negative: the ascent).
+    const OIIO::ROI extent = OIIO::ImageBufAlgo::text_size(text, pixelSize, fontPath());
+    if (!extent.defined() || extent.width() <= 0 || extent.height() <= 0) return false;
+    OIIO::ImageBuf label(OIIO::ImageSpec(extent.width(), extent.height(), 1, OIIO::TypeDesc::FLOAT));
+    OIIO::ImageBufAlgo::zero(label);
+    const float white[1] = {1.f};
+    if (!OIIO::ImageBufAlgo::render_text(label, -extent.xbegin, -extent.ybegin, text, pixelSize, fontPath(), white))
+        return false;
+    const OIIO::ROI roi = label.roi();
+    const int w = roi.width(), h = roi.height();  // i along the text, j down from its top edge
+    const int shift = alignX < 0 ? 0 : alignX == 0 ? w / 2 : w;
+    for (int j = 0; j < h; ++j)
+        for (int i = 0; i < w; ++i) {
+            float cover = 0.f;
+            label.getpixel(roi.xbegin + i, roi.ybegin + j, &cover, 1);
+            cover = std::min(cover, 1.f);
+            if (!(cover > 0.f)) continue;
+            // Vertical text reads upwards: its start at the bottom, its top edge facing left.
+            const int px = vertical ? x + j : x - shift + i;
+            const int py = vertical ? y + shift - i : y + j;
+            if (px < 0 || py < 0 || px >= width || py >= height) continue;
+            float* d = rgb + (size_t(py) * size_t(width) + size_t(px)) * 3;
+            for (int c = 0; c < 3; ++c) d[c] = d[c] * (1.f - cover) + color[c] * cover;
+        }
+    return true;
 }
 
 }  // namespace specula
@@ -36,6 +86,7 @@ extern "C" __attribute__((visibility("default"))) const io_module::Table* specul
         x.createTempFileNear = &createTempFileNear;
         x.commitTempFile = &commitTempFile;
         x.writeImage8 = &writeImage8;
+        x.drawText = &drawText;
         x.textureCreate = [](std::shared_ptr<const ColorConfig> c) { return new TextureStore(std::move(c)); };
         x.textureDestroy = [](TextureStore* s) { delete s; };
         x.textureLoad = [](TextureStore* s, const std::string& p, const std::string& cs) { return s->load(p, cs); };

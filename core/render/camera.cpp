@@ -32,6 +32,32 @@ PerspectiveCamera::PerspectiveCamera(const CameraDesc& desc, int width, int heig
     focus_ = desc.focusDistance > 0.f ? desc.focusDistance : glm::length(desc.lookAt - desc.position);
 }
 
+Mat4 PerspectiveCamera::worldToCamera() const {
+    Mat4 m(1.f);  // glm: m[column][row]
+    for (int c = 0; c < 3; ++c) {
+        m[c][0] = right_[c];
+        m[c][1] = upv_[c];
+        m[c][2] = forward_[c];
+    }
+    m[3][0] = -glm::dot(right_, pos_);
+    m[3][1] = -glm::dot(upv_, pos_);
+    m[3][2] = -glm::dot(forward_, pos_);
+    return m;
+}
+
+// directionFor's inverse: a camera-space point (x, y, z) lands at raster x = (x / (z halfW) + 1) W / 2 and
+// y = (1 - y / (z halfH)) H / 2, so NDC = (0.5 + 0.5 x / (z halfW), 0.5 - 0.5 y / (z halfH)) with w = z.
+Mat4 PerspectiveCamera::worldToNdc() const {
+    Mat4 p(0.f);
+    p[0][0] = 0.5f / halfW_;
+    p[2][0] = 0.5f;
+    p[1][1] = -0.5f / halfH_;
+    p[2][1] = 0.5f;
+    p[2][2] = 1.f;  // z kept (EXR readers discard it)
+    p[2][3] = 1.f;  // w = z
+    return p * worldToCamera();
+}
+
 Vec3 PerspectiveCamera::directionFor(float rasterX, float rasterY) const {
     float sx = (2.f * rasterX / float(width_) - 1.f) * halfW_;
     float sy = (1.f - 2.f * rasterY / float(height_)) * halfH_;

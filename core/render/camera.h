@@ -35,6 +35,11 @@ public:
     const Vec3& up() const { return upv_; }      // the image's up (right x forward)
     float halfWidth() const { return halfW_; }   // image-plane half extents at distance 1
     float halfHeight() const { return halfH_; }
+    // OpenEXR's standard camera attributes (column-vector convention here; image_io writes them as Imath's row-vector
+    // matrices): camera space is left-handed, +x right, +y up, +z the view direction; NDC has (0, 0) at the image's
+    // top-left corner and (1, 1) at its bottom-right, after the division by the fourth (homogeneous) coordinate.
+    Mat4 worldToCamera() const;
+    Mat4 worldToNdc() const;
     const CameraDesc& desc() const { return desc_; }
     int width() const { return width_; }
     int height() const { return height_; }

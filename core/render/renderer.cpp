@@ -216,6 +216,15 @@ RenderOutput renderScene(const Scene& scene, const RenderOptions& options) {
     img.metadata["specula:spp"] = std::to_string(rs.spp);
     img.metadata["specula:seed"] = std::to_string(rs.seed);
     img.metadata["specula:version"] = SPECULA_VERSION;
+    // For compositing (OpenEXR's worldToCamera and worldToNDC): NDC spans the written image, so a crop window's NDC
+    // is the full frame's rescaled to the crop.
+    img.matrices["worldToCamera"] = camera.worldToCamera();
+    Mat4 toCrop(1.f);
+    toCrop[0][0] = float(rs.width) / float(crop.x1 - crop.x0);
+    toCrop[3][0] = -float(crop.x0) / float(crop.x1 - crop.x0);
+    toCrop[1][1] = float(rs.height) / float(crop.y1 - crop.y0);
+    toCrop[3][1] = -float(crop.y0) / float(crop.y1 - crop.y0);
+    img.matrices["worldToNDC"] = toCrop * camera.worldToNdc();
     return out;
 }
 

@@ -197,7 +197,7 @@ TextureHandle TextureStore::load(const std::string& path, const std::string& col
         try {
             declared = I.color->canonicalColorspace(colorspace);
         } catch (const ColorError& e) {
-            throw TextureInputError("texture '" + path + "': " + e.what());
+            throw TextureColorspaceError("texture '" + path + "': " + e.what());
         }
     }
     const auto key = std::make_pair(absPath, autoSpace ? std::string("auto") : declared);

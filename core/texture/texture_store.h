@@ -22,6 +22,10 @@ struct TextureError : std::runtime_error {
 struct TextureInputError : TextureError {
     using TextureError::TextureError;
 };
+// The declared colorspace is not a name, alias or role of the config: the fault is the colorspace, not the file.
+struct TextureColorspaceError : TextureInputError {
+    using TextureInputError::TextureInputError;
+};
 
 enum class TextureWrap { Repeat, Clamp, Mirror, Black };
 

@@ -116,7 +116,7 @@ public:
 
 // The paths written by writeOutputs.
 struct WrittenOutputs {
-    std::string exr, png;  // png empty for a partial image
+    std::string exr, png;  // exr empty for an OUT.png output, png empty for a partial image
     bool partial = false;
 };
 
@@ -186,9 +186,9 @@ public:
     // The job keeps a reference to this scene: keep the scene alive (and unmodified) until wait() returns.
     RenderJob renderAsync(const RenderOptions& opts = {}, TileCallback onTile = {}) const;
 
-    // Writes OUT.exr (every AOV, atomically) and its OCIO-viewed PNG beside it; a cancelled result goes to
-    // OUT.partial.exr instead (never over OUT.exr). Refuses (Error usage) a path that is not .exr or that is
-    // this scene's own file, and (Error io) a missing folder.
+    // Writes OUT.exr (every AOV, atomically) and its OCIO-viewed PNG beside it, or for OUT.png only the viewed PNG;
+    // a cancelled result goes to OUT.partial.exr instead (never over OUT.exr). Refuses (Error usage) a path that is
+    // neither .exr nor .png or that is this scene's own file, and (Error io) a missing folder.
     WrittenOutputs writeOutputs(const RenderResult& result, const std::string& exrPath) const;
 
     // The GLSL module of a material ("" = the only one); literalsAsUniforms false inlines them.

@@ -174,13 +174,14 @@ SPC_API void spc_result_destroy(spc_result* result);
 
 /* What spc_result_write wrote; free both strings with spc_string_free. */
 typedef struct spc_written {
-    char* exr;       /* OUT.exr, or OUT.partial.exr for a cancelled render */
+    char* exr;       /* OUT.exr, or OUT.partial.exr for a cancelled render; "" when OUT.png was asked for */
     char* png;       /* OUT.png beside it; "" for a partial image */
     int32_t partial; /* 1 for a cancelled render */
 } spc_written;
 
 /* Writes the result through libspecula's output policy (docs/api.md "Writing outputs"): OUT.exr (every AOV)
- * + OUT.png, atomically; a cancelled result only OUT.partial.exr, never over OUT.exr. out may be NULL. */
+ * + OUT.png, atomically, or OUT.png alone; a cancelled result only OUT.partial.exr, never over OUT.exr. out may be
+ * NULL. */
 SPC_API spc_status spc_result_write(spc_context* ctx, const spc_scene* scene, const spc_result* result,
                                     const char* exr_path, spc_written* out);
 

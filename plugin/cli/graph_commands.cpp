@@ -159,8 +159,9 @@ Vec3 falseColour(float t) {
     return glm::clamp(c0 + t * (c1 + t * (c2 + t * (c3 + t * (c4 + t * (c5 + t * c6))))), Vec3(0.f), Vec3(1.f));
 }
 
-// A 3x5 pixel font for the colour-bar labels (digits, '.', 'e', '+', '-'), drawn at 2x in white.
-void drawText(std::vector<float>& img, int W, int H, int x0, int y0, const std::string& t) {
+// A 3x5 pixel font for numbers (digits, '.', 'e', '+', '-'), drawn at 2x in white: the colour bars' labels when no
+// font is installed for drawText (core/io/image_io.h).
+void drawDigits(std::vector<float>& img, int W, int H, int x0, int y0, const std::string& t) {
     static const std::map<char, const char*> glyphs = {
         {'0', "111101101101111"}, {'1', "010110010010111"}, {'2', "111001111100111"}, {'3', "111001111001111"},
         {'4', "101101111001001"}, {'5', "111100111001111"}, {'6', "111100111101111"}, {'7', "111001001001001"},
@@ -421,7 +422,7 @@ void addGraphCommands(CLI::App& app, int& exitCode) {
             ScratchArena arena;
             Closure cl;
             mi.material->shade(sp, arena, cl);
-            const int S = p->size, bar = 16, label = 14, gap = 8, W = 2 * S + gap, H = S + gap + bar + label;
+            const int S = p->size;
             std::vector<float> lobe(size_t(S) * S, -1.f), ndf(size_t(S) * S, -1.f);
             std::vector<float> lobeRgb(size_t(S) * S * 3, 0.f);
             float lobeMax = 0.f, ndfMax = 0.f;
@@ -452,38 +453,82 @@ void addGraphCommands(CLI::App& app, int& exitCode) {
                         ndfMax = std::max(ndfMax, val);
                     }
                 }
+            // Layout: titles above the panels, tick labels and axis names beside and below them, then the colour bars
+            // with their range and quantity.
+            const int font = 12, left = 40, between = 48, right = 14, top = 24, axes = 34, barGap = 6, bar = 14,
+                      barLabels = 20;
+            const int W = left + S + between + S + right, H = top + S + axes + barGap + bar + barLabels;
+            const int x0[2] = {left, left + S + between}, y0 = top, yBar = top + S + axes + barGap;
             std::vector<float> img(size_t(W) * H * 3, 0.f);
-            auto put = [&](int x, int y, Vec3 c) { std::copy(&c.x, &c.x + 3, &img[(size_t(y) * W + x) * 3]); };
+            auto put = [&](int x, int y, Vec3 c) {
+                if (x >= 0 && y >= 0 && x < W && y < H) std::copy(&c.x, &c.x + 3, &img[(size_t(y) * W + x) * 3]);
+            };
             for (int y = 0; y < S; ++y)
                 for (int x = 0; x < S; ++x) {
                     float a = lobe[size_t(y) * S + x], b = ndf[size_t(y) * S + x];
-                    put(x, y, a < 0.f ? Vec3(0.15f) : falseColour(lobeMax > 0.f ? a / lobeMax : 0.f));
-                    put(S + gap + x, y, b < 0.f ? Vec3(0.15f) : falseColour(ndfMax > 0.f ? b / ndfMax : 0.f));
+                    put(x0[0] + x, y0 + y, a < 0.f ? Vec3(0.15f) : falseColour(lobeMax > 0.f ? a / lobeMax : 0.f));
+                    put(x0[1] + x, y0 + y, b < 0.f ? Vec3(0.15f) : falseColour(ndfMax > 0.f ? b / ndfMax : 0.f));
                 }
-            for (int y = S + gap; y < S + gap + bar; ++y)
+            for (int y = yBar; y < yBar + bar; ++y)
                 for (int x = 0; x < S; ++x) {
-                    Vec3 c = falseColour(float(x) / (S - 1));
-                    put(x, y, c);
-                    if (g) put(S + gap + x, y, c);
+                    Vec3 c = falseColour(float(x) / float(S - 1));
+                    put(x0[0] + x, y, c);
+                    if (g) put(x0[1] + x, y, c);
                 }
-            // Labels under each bar: 0 on the left, the value of the top colour on the right.
-            auto text = [&](int x0, int y0, const std::string& t, bool right) {
-                int w = int(t.size()) * 8;
-                drawText(img, W, H, right ? x0 - w : x0, y0, t);
+            auto number = [](double v) {
+                char buf[32];
+                std::snprintf(buf, sizeof buf, "%.3g", v);
+                return std::string(buf);
             };
-            char buf[32];
-            text(0, S + gap + bar + 2, "0", false);
-            std::snprintf(buf, sizeof buf, "%.3g", lobeMax);
-            text(S, S + gap + bar + 2, buf, true);
-            if (g) {
-                text(S + gap, S + gap + bar + 2, "0", false);
-                std::snprintf(buf, sizeof buf, "%.3g", ndfMax);
-                text(W, S + gap + bar + 2, buf, true);
+            const Vec3 white(1.f), grey(0.75f);
+            // Tick marks at -1, 0, 1 of each panel's axes (the slope range on the right).
+            for (int k = 0; k < 2; ++k)
+                for (int t = 0; t < 3; ++t) {
+                    const int along = std::min(S - 1, t * (S - 1) / 2);
+                    for (int d = 1; d <= 4; ++d) {
+                        put(x0[k] + along, y0 + S + d - 1, grey);  // below the panel
+                        put(x0[k] - d, y0 + along, grey);          // left of it
+                    }
+                }
+            const std::string rangeText = number(range);
+            const std::string ticks[2][3] = {{"-1", "0", "1"}, {"-" + rangeText, "0", rangeText}};
+            const std::string titles[2] = {"f(wo, wi) cos(theta_i), projected hemisphere",
+                                           g ? "GGX slope-space NDF P22(slope)" : "no GGX lobe: no NDF panel"};
+            const std::string xNames[2] = {"wi.x", "slope x"}, yNames[2] = {"wi.y", "slope y"};
+            const std::string barNames[2] = {"luminance, 1/sr", "1 / unit slope area"};
+            const std::string maxima[2] = {number(lobeMax), number(ndfMax)};
+            bool fonts = true;
+            auto text = [&](int x, int y, const std::string& t, int align, bool vertical = false, int size = 12) {
+                fonts = fonts && drawText(img.data(), W, H, x, y, t, size, white, align, vertical);
+            };
+            for (int k = 0; k < 2 && fonts; ++k) {
+                text(x0[k] + S / 2, 4, titles[k], 0, false, font + 1);
+                if (k == 1 && !g) break;
+                for (int t = 0; t < 3; ++t) {
+                    const int along = t * (S - 1) / 2;
+                    text(x0[k] + along, y0 + S + 5, ticks[k][t], t == 0 ? -1 : t == 1 ? 0 : 1);
+                    // y ticks: -1 at the bottom; upright numbers right-aligned against the tick marks
+                    text(x0[k] - 7, y0 + S - 1 - along - font / 2 - 1, ticks[k][t], 1);
+                }
+                text(x0[k] + S / 2, y0 + S + 5 + font + 2, xNames[k], 0);
+                text(x0[k] - 7 - 6 * int(std::max(ticks[k][0].size(), ticks[k][2].size())) - font - 4, y0 + S / 2,
+                     yNames[k], 0, true);
+                text(x0[k], yBar + bar + 3, "0", -1);
+                text(x0[k] + S, yBar + bar + 3, maxima[k], 1);
+                text(x0[k] + S / 2, yBar + bar + 3, barNames[k], 0);
+            }
+            if (!fonts) {  // no font installed: the colour bars' numbers in the pixel font, and a note
+                std::fprintf(stderr, "specula plot: warning: no font for the labels (install fonts-dejavu-core or set "
+                                     "SPECULA_FONT); only the colour bars' numbers are drawn\n");
+                for (int k = 0; k < (g ? 2 : 1); ++k) {
+                    drawDigits(img, W, H, x0[k], yBar + bar + 3, "0");
+                    drawDigits(img, W, H, x0[k] + S - 8 * int(maxima[k].size()), yBar + bar + 3, maxima[k]);
+                }
             }
             std::ostringstream desc;
             desc << "specula plot: left = luminance of f*cos over the projected hemisphere (0.." << lobeMax
                  << "), right = GGX slope-space NDF P22 over slopes [-" << range << "," << range << "]^2 (0.." << ndfMax
-                 << "); colour bars below map 0..max (labelled)";
+                 << "); titles, axes and colour bars labelled";
             writeImage8(p->out, W, H, 3, img.data(), desc.str());  // via libspecula's lazily loaded image I/O
             if (!p->raw.empty()) {
                 ImageSet raw;

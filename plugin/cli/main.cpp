@@ -85,7 +85,8 @@ int main(int argc, char** argv) {
     int spp = 0, threads = 0;
     int64_t seed = -1;
     render->add_option("scene", scenePath, "Scene file (JSON, format v1)")->required();
-    render->add_option("-o,--output", outPath, "Output EXR (default: <scene name>.exr in the current folder)");
+    render->add_option("-o,--output", outPath, "Output: OUT.exr (every AOV, with the viewed OUT.png beside it) or OUT.png "
+                                               "(the viewed image only); default <scene name>.exr in the current folder");
     render->add_option("--spp", spp, "Samples per pixel (overrides the scene)")->check(CLI::Range(1, 1 << 20));
     render->add_option("--threads", threads, "Worker threads (default: all cores)")->check(CLI::Range(0, 1024));
     std::string maxMemory;
@@ -194,9 +195,10 @@ int main(int argc, char** argv) {
                 std::printf("%s\n", doneEventJson(st, w.exr, w.png).c_str());
             else
                 std::fprintf(stderr, "specula: rendered %dx%d at %d spp in %s (%.2f Msamples/s); %llu NaN/Inf samples dropped\n"
-                                     "specula: wrote %s and %s\n",
+                                     "specula: wrote %s\n",
                              result.images.width, result.images.height, scene.render.spp, formatSeconds(st.seconds).c_str(),
-                             sps / 1e6, (unsigned long long)st.invalidSamples, w.exr.c_str(), w.png.c_str());
+                             sps / 1e6, (unsigned long long)st.invalidSamples,
+                             (w.exr.empty() ? w.png : w.exr + " and " + w.png).c_str());
         } catch (const std::exception& e) {
             exitCode = reportError(e, kExitIo);
         }
@@ -231,12 +233,19 @@ int main(int argc, char** argv) {
                 // JSON has no infinity: identical images report "psnr": null.
                 char psnr[32] = "null";
                 if (std::isfinite(r.psnr)) std::snprintf(psnr, sizeof psnr, "%.6g", r.psnr);
-                std::printf("{\"aov\":%s,\"rmse\":%.9g,\"mae\":%.9g,\"psnr\":%s,\"psnr_peak\":%.9g,\"mean_a\":%.9g,\"mean_b\":%.9g}\n",
-                            jsonString(aov).c_str(), r.rmse, r.mae, psnr, r.peak, r.meanA, r.meanB);
+                std::printf("{\"aov\":%s,\"rmse\":%.9g,\"mae\":%.9g,\"psnr\":%s,\"psnr_peak\":%.9g,\"mean_a\":%.9g,\"mean_b\":%.9g,"
+                            "\"channels\":%s,\"ignored_channels\":%s}\n",
+                            jsonString(aov).c_str(), r.rmse, r.mae, psnr, r.peak, r.meanA, r.meanB,
+                            nlohmann::json(r.compared).dump().c_str(), nlohmann::json(r.ignored).dump().c_str());
             }
-            else
-                std::printf("aov   %s (%dx%d, %d channels)\nRMSE  %.6g\nMAE   %.6g\nPSNR  %.3f dB (peak %.6g: the reference's maximum)\n",
-                            aov.c_str(), r.width, r.height, r.channels, r.rmse, r.mae, r.psnr, r.peak);
+            else {
+                std::string channels;
+                for (const std::string& c : r.compared) channels += (channels.empty() ? "" : ",") + c;
+                std::printf("aov   %s (%dx%d, channels %s)\n", aov.c_str(), r.width, r.height, channels.c_str());
+                for (const std::string& c : r.ignored) std::printf("note  channel %s is not compared\n", c.c_str());
+                std::printf("RMSE  %.6g\nMAE   %.6g\nPSNR  %.3f dB (peak %.6g: the reference's maximum)\n", r.rmse, r.mae,
+                            r.psnr, r.peak);
+            }
         } catch (const Error& e) {
             exitCode = reportError(e, e.exitCode());  // NaN/Inf in an image: bad input (1)
         } catch (const std::exception& e) {

@@ -65,7 +65,8 @@ void addPreviewCommand(CLI::App& app, int& exitCode) {
                                        {"height", scene.render.height}, {"frames", frames},
                                        {"gpu_ms_per_frame", out.gpuMsPerFrame}, {"wall_ms_per_frame", out.wallMsPerFrame},
                                        {"setup_seconds", out.setupSeconds},
-                                       {"exr", written.exr}, {"png", written.png}};
+                                       {"exr", written.exr.empty() ? nlohmann::json() : nlohmann::json(written.exr)},
+                                       {"png", written.png}};
                 std::printf("%s\n", line.dump().c_str());
             }
             std::fprintf(stderr,
@@ -73,7 +74,8 @@ void addPreviewCommand(CLI::App& app, int& exitCode) {
                          "set-up %.2fs\n",
                          scene.render.width, scene.render.height, out.renderer.c_str(), out.gpuMsPerFrame,
                          out.wallMsPerFrame, frames, out.setupSeconds);
-            std::fprintf(stderr, "specula: wrote %s and %s\n", written.exr.c_str(), written.png.c_str());
+            std::fprintf(stderr, "specula: wrote %s\n",
+                         (written.exr.empty() ? written.png : written.exr + " and " + written.png).c_str());
         } catch (const std::exception& e) {
             std::fprintf(stderr, "specula: error: %s\n", e.what());
             exitCode = exitCodeFor(e);

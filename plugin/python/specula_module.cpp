@@ -210,7 +210,7 @@ class BadInputError(Error):
     """An invalid scene, value or name (code 'bad_input')."""
 
 class UsageError(Error):
-    """A call the API refuses, e.g. an output path not ending in .exr (code 'usage')."""
+    """A call the API refuses, e.g. an output path ending in neither .exr nor .png (code 'usage')."""
 
 class IoError(Error):
     """A file that cannot be read or a folder that does not exist (code 'io')."""
@@ -289,14 +289,14 @@ class IoError(Error):
                     w = scene.scene.writeOutputs(r.result, path);
                 }
                 py::dict d;
-                d["exr"] = w.exr, d["png"] = w.png.empty() ? py::object(py::none()) : py::object(py::str(w.png));
+                d["exr"] = w.exr.empty() ? py::object(py::none()) : py::object(py::str(w.exr)), d["png"] = w.png.empty() ? py::object(py::none()) : py::object(py::str(w.png));
                 d["partial"] = w.partial;
                 return d;
             },
             py::arg("scene"), py::arg("path"),
-            "Writes PATH (.exr, every AOV) and its PNG beside it, each atomically; a cancelled render writes only\n"
-            "PATH.partial.exr (never over PATH). Returns {'exr': path, 'png': path or None, 'partial': bool}.\n"
-            "Errors: UsageError for a path not ending in .exr, IoError for a missing folder.")
+            "Writes PATH (.exr, every AOV) and its PNG beside it, or PATH (.png) alone, atomically; a cancelled render\n"
+            "writes only PATH.partial.exr (never over PATH). Returns {'exr': path or None, 'png': path or None,\n"
+            "'partial': bool}. Errors: UsageError for a path ending in neither .exr nor .png, IoError for a missing folder.")
         .def("__repr__", [](const PyResult& r) {
             return "<specula.RenderResult " + std::to_string(r.result.width()) + "x" +
                    std::to_string(r.result.height()) + (r.result.stats().cancelled ? " cancelled>" : ">");

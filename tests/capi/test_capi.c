@@ -420,9 +420,15 @@ int main(int argc, char** argv) {
         A.spc_string_free(w.exr), A.spc_string_free(w.png);
         OK(ctx, A.spc_result_write(ctx, scene, r1, path, NULL)); /* out is optional */
 
-        snprintf(cexr, sizeof cexr, "%s/out.png", dir);
-        expectError(ctx, A.spc_result_write(ctx, scene, r1, cexr, &w), SPC_USAGE, NULL, "write to .png");
+        snprintf(cexr, sizeof cexr, "%s/out.tif", dir);
+        expectError(ctx, A.spc_result_write(ctx, scene, r1, cexr, &w), SPC_USAGE, NULL, "write to .tif");
         CHECK(w.exr == NULL && w.png == NULL);
+        /* OUT.png: the viewed PNG alone, exr "" */
+        snprintf(cexr, sizeof cexr, "%s/only.png", dir);
+        OK(ctx, A.spc_result_write(ctx, scene, r1, cexr, &w));
+        CHECK(w.partial == 0 && w.exr && w.exr[0] == '\0' && w.png && strcmp(w.png, cexr) == 0 && fileExists(cexr));
+        A.spc_string_free(w.exr), A.spc_string_free(w.png);
+        remove(cexr);
         expectError(ctx, A.spc_result_write(ctx, scene, r1, "/nonexistent/dir/out.exr", NULL), SPC_IO, NULL,
                     "write to a missing folder");
         printf("outputs: full.exr + full.png; cancelled.partial.exr only\n");

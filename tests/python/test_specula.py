@@ -163,7 +163,9 @@ def test_write_outputs(tmp_path):
     assert w["partial"] and w["png"] is None and w["exr"].endswith("cut.partial.exr")
     assert not (tmp_path / "cut.exr").exists()
     with pytest.raises(specula.UsageError):
-        s.render().write(s, str(tmp_path / "out.png"))
+        s.render().write(s, str(tmp_path / "out.tiff"))
+    w = s.render().write(s, str(tmp_path / "only.png"))  # the viewed PNG alone
+    assert w["exr"] is None and w["png"].endswith("only.png") and not (tmp_path / "only.exr").exists()
     with pytest.raises(specula.Error) as e:
         s.render().write(s, str(tmp_path / "missing" / "out.exr"))
     assert e.value.code == "io"

@@ -208,7 +208,11 @@ TEST(Api, OutputPolicyAtomicPartialNeverClobbering) {
         }
         return ErrorCode::Ok;
     };
-    EXPECT_EQ(code(dir + "/out.png"), ErrorCode::Usage);
+    EXPECT_EQ(code(dir + "/out.tif"), ErrorCode::Usage);
+    // OUT.png: the viewed PNG alone (issue 17 item 5), no EXR beside it.
+    EXPECT_EQ(code(dir + "/only.png"), ErrorCode::Ok);
+    EXPECT_TRUE(fs::exists(dir + "/only.png"));
+    EXPECT_FALSE(fs::exists(dir + "/only.exr"));
     EXPECT_EQ(code(dir + "/missing/out.exr"), ErrorCode::Io);
     EXPECT_THROW(specula::checkOutputPath(dir + "/s.exr", dir + "/s.exr"), Error);  // never the input itself
 }

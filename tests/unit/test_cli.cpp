@@ -219,6 +219,29 @@ TEST(Cli, GlslAndPlotCommandsWriteTheirOutputs) {
     EXPECT_FALSE(fs::exists(dir + "/x.glsl"));
     ASSERT_EQ(test::runCli("plot " + q(dir + "/s.json") + " --material m --wo 0.3,0,0.95 -o " + q(dir + "/lobe.png"), &out), 0) << out;
     EXPECT_TRUE(fs::exists(dir + "/lobe.png"));
+    // Issue 17 item 5: titles, axes (ticks and names) and colour bars are labelled. White text pixels (the panels
+    // are false colour, the background black) in each band of the 256-pixel layout: titles above the panels, the y
+    // axes' labels left of each panel, the x axes' below, the colour bars' range and quantity under the bars.
+    ImageSet plot = readImageSet(dir + "/lobe.png");
+    ASSERT_EQ(plot.width, 40 + 256 + 48 + 256 + 14);
+    ASSERT_EQ(plot.height, 24 + 256 + 34 + 6 + 14 + 20);
+    const AovBuffer& px = plot.aovs.front();
+    auto whiteIn = [&](int x0, int y0, int x1, int y1) {
+        int n = 0;
+        for (int y = y0; y < y1; ++y)
+            for (int x = x0; x < x1; ++x) {
+                const float* p = &px.pixels[(size_t(y) * plot.width + x) * size_t(px.channels())];
+                n += p[0] > 0.6f && p[1] > 0.6f && p[2] > 0.6f;
+            }
+        return n;
+    };
+    const int left = 40, right = 40 + 256 + 48, below = 24 + 256, bars = 24 + 256 + 34 + 6 + 14;
+    for (int x0 : {left, right}) {
+        EXPECT_GT(whiteIn(x0, 0, x0 + 256, 22), 60) << "title above the panel at x " << x0;
+        EXPECT_GT(whiteIn(x0 - 40, 24, x0 - 2, below), 30) << "y axis labels left of the panel at x " << x0;
+        EXPECT_GT(whiteIn(x0 - 8, below + 4, x0 + 264, below + 34), 60) << "x axis labels below the panel at x " << x0;
+        EXPECT_GT(whiteIn(x0, bars, x0 + 256, bars + 20), 60) << "colour bar labels under the bar at x " << x0;
+    }
 }
 
 TEST(Cli, GlslResourcesWritesAManifestAndEveryLevel) {
@@ -538,4 +561,92 @@ TEST(Cli, InfoListsMeshAttributesAndWarnsAboutMissingUvs) {
     test::writeFile(dir + "/bad.json", std::regex_replace(scene, std::regex("\"shading\": \"flat\""), "\"smooth_angle\": 200"));
     EXPECT_EQ(test::runCli("info " + q(dir + "/bad.json"), &out), 1) << out;
     EXPECT_NE(out.find("/shapes/2/smooth_angle"), std::string::npos) << out;
+}
+
+// Issue 17 item 5: `render -o OUT.png` writes the viewed PNG alone; the EXR carries OpenEXR's worldToCamera and
+// worldToNDC. The matrices are checked against the renderer itself: a small emitting sphere's image centroid must
+// sit where worldToNDC puts its centre, in the full frame and in a crop window.
+TEST(Cli, PngOnlyOutputAndExrCameraMatricesMatchTheImage) {
+    std::string dir = test::tempDir("cli-camera-matrices");
+    const Vec3 centre(0.9f, 0.3f, 1.35f);
+    test::writeFile(dir + "/s.json", R"({
+      "render": {"width": 96, "height": 64, "spp": 4},
+      "camera": {"position": [0.3, -4, 1.2], "look_at": [0, 0, 1], "fov": 50},
+      "materials": {"e": {"nodes": {"e": {"type": "bsdf.emission", "inputs": {"strength": 5}}}, "output": "@e.bsdf"}},
+      "shapes": [{"type": "sphere", "radius": 0.06, "transform": {"translate": [0.9, 0.3, 1.35]}, "material": "e"}]})");
+    std::string out;
+    ASSERT_EQ(test::runCli("render " + q(dir + "/s.json") + " -o " + q(dir + "/only.png") + " --progress none", &out), 0) << out;
+    EXPECT_TRUE(fs::exists(dir + "/only.png"));
+    EXPECT_FALSE(fs::exists(dir + "/only.exr")) << "-o OUT.png writes no EXR";
+    EXPECT_NE(out.find("wrote " + dir + "/only.png\n"), std::string::npos) << out;
+    EXPECT_EQ(test::runCli("render " + q(dir + "/s.json") + " -o " + q(dir + "/x.jpg") + " --progress none", &out), 2) << out;
+
+    for (const std::string crop : {"", " --crop 40,8,96,40"}) {
+        ASSERT_EQ(test::runCli("render " + q(dir + "/s.json") + " -o " + q(dir + "/m.exr") + crop + " --progress none", &out), 0) << out;
+        ImageSet img = readImageSet(dir + "/m.exr");
+        ASSERT_EQ(img.matrices.count("worldToCamera"), 1u) << crop;
+        ASSERT_EQ(img.matrices.count("worldToNDC"), 1u) << crop;
+        // Camera space: the camera at the origin, looking down +z, the look-at point straight ahead.
+        const Mat4 toCamera = img.matrices["worldToCamera"];
+        EXPECT_LT(glm::length(Vec3(toCamera * Vec4(0.3f, -4.f, 1.2f, 1.f))), 1e-5f);
+        const Vec3 ahead = Vec3(toCamera * Vec4(0.f, 0.f, 1.f, 1.f));
+        EXPECT_NEAR(ahead.x, 0.f, 1e-5f);
+        EXPECT_NEAR(ahead.y, 0.f, 1e-5f);
+        EXPECT_GT(ahead.z, 0.f);
+        const Vec4 h = img.matrices["worldToNDC"] * Vec4(centre, 1.f);
+        const Vec2 ndc(h.x / h.w, h.y / h.w);
+        // The centroid of the sphere's light, in pixels of the written image.
+        const AovBuffer* beauty = img.find("beauty");
+        ASSERT_NE(beauty, nullptr);
+        double sx = 0, sy = 0, sw = 0;
+        for (int y = 0; y < img.height; ++y)
+            for (int x = 0; x < img.width; ++x) {
+                const float v = beauty->pixels[(size_t(y) * img.width + x) * size_t(beauty->channels())];
+                sx += v * (x + 0.5), sy += v * (y + 0.5), sw += v;
+            }
+        ASSERT_GT(sw, 0.0) << crop;
+        EXPECT_NEAR(ndc.x * img.width, sx / sw, 0.25) << crop;
+        EXPECT_NEAR(ndc.y * img.height, sy / sw, 0.25) << crop;
+    }
+    // The file holds them under OpenEXR's standard names.
+    const std::string bytes = test::readFile(dir + "/m.exr");
+    EXPECT_NE(bytes.find(std::string("worldToCamera\0m44f", 18)), std::string::npos);
+    EXPECT_NE(bytes.find(std::string("worldToNDC\0m44f", 15)), std::string::npos);
+}
+
+// Issue 17 item 5: an RGBA image against an RGB one compares the common channels by name and says which were left
+// out; the metrics are those of the common channels alone (RMSE of a 0.1 offset in one of three channels).
+TEST(Cli, CompareMatchesChannelsByNameAndSaysWhatItLeftOut) {
+    std::string dir = test::tempDir("cli-compare-rgba");
+    auto color = ColorConfig::load("builtin");
+    const int w = 8, h = 4;
+    ImageSet rgba, rgb;
+    rgba.width = rgb.width = w;
+    rgba.height = rgb.height = h;
+    rgba.aovs.push_back({"beauty", {"R", "G", "B", "A"}, std::vector<float>(size_t(w * h * 4))});
+    rgb.aovs.push_back({"beauty", {"R", "G", "B"}, std::vector<float>(size_t(w * h * 3))});
+    for (int i = 0; i < w * h; ++i) {
+        for (int c = 0; c < 3; ++c) rgb.aovs[0].pixels[size_t(3 * i + c)] = 0.25f * float(c + 1);
+        for (int c = 0; c < 3; ++c) rgba.aovs[0].pixels[size_t(4 * i + c)] = 0.25f * float(c + 1) + (c == 0 ? 0.1f : 0.f);
+        rgba.aovs[0].pixels[size_t(4 * i + 3)] = 1.f;
+    }
+    writeExr(dir + "/rgba.exr", rgba, *color);
+    writeExr(dir + "/rgb.exr", rgb, *color);
+    std::string out;
+    ASSERT_EQ(test::runCli("compare " + q(dir + "/rgba.exr") + " " + q(dir + "/rgb.exr") + " --json", &out), 0) << out;
+    auto j = nlohmann::json::parse(out);
+    EXPECT_EQ(j["channels"], nlohmann::json({"R", "G", "B"}));
+    ASSERT_EQ(j["ignored_channels"].size(), 1u) << out;
+    EXPECT_NE(j["ignored_channels"][0].get<std::string>().find("A (only in '" + dir + "/rgba.exr')"), std::string::npos) << out;
+    EXPECT_NEAR(j["rmse"].get<double>(), std::sqrt(0.01 / 3.0), 1e-6);
+    EXPECT_NEAR(j["mae"].get<double>(), 0.1 / 3.0, 1e-6);
+    ASSERT_EQ(test::runCli("compare " + q(dir + "/rgba.exr") + " " + q(dir + "/rgb.exr"), &out), 0) << out;
+    EXPECT_NE(out.find("channels R,G,B"), std::string::npos) << out;
+    EXPECT_NE(out.find("note  channel A (only in"), std::string::npos) << out;
+    // Nothing in common is an error that lists both sides' channels.
+    ImageSet z = rgb;
+    z.aovs[0].channelNames = {"X", "Y", "Z"};
+    writeExr(dir + "/xyz.exr", z, *color);
+    EXPECT_EQ(test::runCli("compare " + q(dir + "/xyz.exr") + " " + q(dir + "/rgb.exr"), &out), 3) << out;
+    EXPECT_NE(out.find("no channel in common"), std::string::npos) << out;
 }

@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -218,6 +219,24 @@ TEST(ColorConfig, UnknownNamesListValidAndNearest) {
         EXPECT_NE(m.find("Standard"), std::string::npos) << m;
     }
     EXPECT_THROW(config()->toWorking(rgb, 0, "nope"), ColorError);  // validated even with no pixels
+}
+
+// Issue 17 item 5: every colorspace name, alias and role the built-in config accepts is in docs/scene-format.md's
+// "Colorspace names" section (as `name`, compared without case, as the loader compares them).
+TEST(ColorConfig, EveryAcceptedColorspaceNameIsDocumented) {
+    const std::string page = test::readFile(test::sourcePath("docs/scene-format.md"));
+    const size_t from = page.find("### Colorspace names"), to = page.find("\n## ", from);
+    ASSERT_NE(from, std::string::npos);
+    std::string section = page.substr(from, to - from);
+    auto lower = [](std::string t) {
+        for (char& c : t) c = char(std::tolower(static_cast<unsigned char>(c)));
+        return t;
+    };
+    section = lower(section);
+    const std::vector<std::string> names = config()->acceptedColorspaceNames();
+    EXPECT_GT(names.size(), 20u);
+    for (const std::string& n : names)
+        EXPECT_NE(section.find("`" + lower(n) + "`"), std::string::npos) << "'" << n << "' is accepted but not documented";
 }
 
 TEST(ColorConfig, ConcurrentConversionsAgree) {

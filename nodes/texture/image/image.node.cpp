@@ -76,6 +76,8 @@ std::shared_ptr<const void> prepare(const PrepareContext& pc) {
     d->wrap = w == "clamp" ? wraps[1] : w == "mirror" ? wraps[2] : wraps[0];
     try {
         d->handle = pc.load->textures->load(path, cs);
+    } catch (const TextureColorspaceError& e) {
+        throw InputError(pc.pointer("colorspace"), e.what());  // the key to fix is colorspace, not file
     } catch (const std::exception& e) {
         throwTextureLoadError(pc.pointer("file"), path, std::string("cannot load texture: ") + e.what(), e);
     }
