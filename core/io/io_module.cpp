@@ -115,6 +115,9 @@ const std::vector<NormalMapKind>& allNormalMapKinds() { return table().allNormal
 NormalMap generateNormalMap(NormalMapKind kind, int size, uint64_t seed) {
     return table().generateNormalMap(kind, size, seed);
 }
+NormalMap generateBrushedNormalMap(int size, uint64_t seed, double angleDegrees, double* usedAngleDegrees) {
+    return table().generateBrushedNormalMap(size, seed, angleDegrees, usedAngleDegrees);
+}
 void writeNormalMap(const NormalMap& map, const std::string& path) { table().writeNormalMap(map, path); }
 uint64_t normalMapHash(const NormalMap& map) { return table().normalMapHash(map); }
 SlopeStats slopeStats(const NormalMap& map) { return table().slopeStats(map); }

@@ -45,6 +45,7 @@ struct Table {
     NormalMapKind (*parseNormalMapKind)(const std::string&);
     const std::vector<NormalMapKind>& (*allNormalMapKinds)();
     NormalMap (*generateNormalMap)(NormalMapKind, int, uint64_t);
+    NormalMap (*generateBrushedNormalMap)(int, uint64_t, double, double*);
     void (*writeNormalMap)(const NormalMap&, const std::string&);
     uint64_t (*normalMapHash)(const NormalMap&);
     SlopeStats (*slopeStats)(const NormalMap&);

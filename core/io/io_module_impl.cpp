@@ -103,6 +103,7 @@ extern "C" __attribute__((visibility("default"))) const io_module::Table* specul
         x.parseNormalMapKind = &parseNormalMapKind;
         x.allNormalMapKinds = &allNormalMapKinds;
         x.generateNormalMap = &generateNormalMap;
+        x.generateBrushedNormalMap = &generateBrushedNormalMap;
         x.writeNormalMap = &writeNormalMap;
         x.normalMapHash = &normalMapHash;
         x.slopeStats = &slopeStats;

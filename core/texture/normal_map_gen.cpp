@@ -10,6 +10,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <numeric>
 #include <cmath>
 #include <filesystem>
 
@@ -170,10 +171,11 @@ Gradients bumps(int n, uint64_t seed) {
     return G;
 }
 
-Gradients brushed(int n, uint64_t seed) {
+Gradients brushed(int n, uint64_t seed, int A = 2, int B = 1) {
     Hash H = makeHash(seed, NormalMapKind::Brushed, 0);
-    // Grooves run along d = (2, 1)/sqrt(5). Across-coordinate w = -u + 2v, along-coordinate a = 2u + v: integer
-    // coefficients keep every octave periodic over the unit tile. One lattice cell across spans n/(P sqrt 5) texels.
+    // Grooves run along d = (A, B)/|(A, B)|, (2, 1) by default. Across-coordinate w = -B u + A v, along-coordinate
+    // a = A u + B v: integer coefficients keep every octave periodic over the unit tile. One lattice cell across spans
+    // n/(P |(A, B)|) texels, so P is scaled by sqrt(5)/|(A, B)| to keep the default direction's groove width.
     struct Oct {
         int pw, pa;
         double w;
@@ -183,22 +185,23 @@ Gradients brushed(int n, uint64_t seed) {
     const int along[4] = {1, 1, 1, 1};
     const double weight[4] = {1.0, 0.7, 0.5, 0.35};
     for (int o = 0; o < 4; ++o) {
-        int pw = std::max(1, int(std::floor(n / across[o] + 0.5)));
+        const double widthScale = std::sqrt(5.0) / std::sqrt(double(A * A + B * B));
+        int pw = std::max(1, int(std::floor(n / across[o] * widthScale + 0.5)));
         octs.push_back({pw, along[o], weight[o]});
     }
     Gradients G(n);
     forEachRow(n, [&](int yv) {
         for (int x = 0; x < n; ++x) {
             double u = (x + 0.5) / n, v = (yv + 0.5) / n;
-            double w = -u + 2 * v, a = 2 * u + v;
+            double w = -B * u + A * v, a = A * u + B * v;
             double sx = 0, sy = 0;
             for (size_t o = 0; o < octs.size(); ++o) {
                 const Oct& O = octs[o];
                 NoiseSample s = gradientNoise(w * O.pw, a * O.pa, O.pw, O.pa, H, uint32_t(o));
-                // h = c/pw * noise(pw w, pa a): dh/du = c (-ds + 2 pa/pw dt), dh/dv = c (2 ds + pa/pw dt).
+                // h = c/pw * noise(pw w, pa a): dh/du = c (-B ds + A pa/pw dt), dh/dv = c (A ds + B pa/pw dt).
                 double r = double(O.pa) / O.pw;
-                sx += O.w * (-s.dx + 2 * r * s.dy);
-                sy += O.w * (2 * s.dx + r * s.dy);
+                sx += O.w * (-B * s.dx + A * r * s.dy);
+                sy += O.w * (A * s.dx + B * r * s.dy);
             }
             G.gx[G.idx(x, yv)] = sx;
             G.gy[G.idx(x, yv)] = sy;
@@ -408,6 +411,27 @@ NormalMap generateNormalMap(NormalMapKind kind, int size, uint64_t seed) {
         case NormalMapKind::Stone: return fromGradients(stone(size, seed));
     }
     throw NormalMapError("invalid normal-map kind");
+}
+
+NormalMap generateBrushedNormalMap(int size, uint64_t seed, double angleDegrees, double* usedAngleDegrees) {
+    if (size < 8 || size > 8192) throw NormalMapError("normal-map size " + std::to_string(size) + " is outside 8..8192");
+    if (!std::isfinite(angleDegrees)) throw NormalMapError("brush angle must be a finite number of degrees");
+    // A groove direction repeats after 180 degrees; the tile stays seamless only for integer directions (A, B), so the
+    // nearest one with |A|, B <= 8 is used (the default 26.565 degrees is (2, 1) exactly).
+    const double want = std::fmod(std::fmod(angleDegrees, 180.0) + 180.0, 180.0);
+    int bestA = 2, bestB = 1;
+    double bestErr = 1e9;
+    for (int b = 0; b <= 8; ++b)
+        for (int a = -8; a <= 8; ++a) {
+            if ((a == 0 && b == 0) || std::gcd(std::abs(a), b) != 1 || (b == 0 && a < 0)) continue;
+            const double angle = std::atan2(double(b), double(a)) * 180.0 / 3.14159265358979323846;
+            double err = std::abs(angle - want);
+            err = std::min(err, 180.0 - err);
+            if (err < bestErr - 1e-9 || (std::abs(err - bestErr) <= 1e-9 && std::abs(a) + b < std::abs(bestA) + bestB))
+                bestErr = err, bestA = a, bestB = b;
+        }
+    if (usedAngleDegrees) *usedAngleDegrees = std::atan2(double(bestB), double(bestA)) * 180.0 / 3.14159265358979323846;
+    return fromGradients(brushed(size, seed, bestA, bestB));
 }
 
 void writeNormalMap(const NormalMap& map, const std::string& path) {

@@ -41,6 +41,11 @@ struct NormalMap {
 //  stone     Voronoi cobbles (bevelled domes, mortar grooves) with two octaves of surface noise, RMS ~0.3.
 NormalMap generateNormalMap(NormalMapKind kind, int size, uint64_t seed);
 
+// The brushed map with its grooves along 'angleDegrees' from +u (counter-clockwise towards +v). A seamless tile
+// needs an integer direction (A, B): the nearest one with |A|, B <= 8 is used, and its angle is returned in
+// *usedAngleDegrees (within 3.6 degrees of the request; 26.565 is (2, 1), the default brushed map exactly).
+NormalMap generateBrushedNormalMap(int size, uint64_t seed, double angleDegrees, double* usedAngleDegrees = nullptr);
+
 // 'generate:<kind>:<size>:<seed>' names a generated map wherever a normal-map file is expected (texture.image with
 // colorspace raw, texture.lean, bsdf.ltc_normal_map, bsdf.glint_pndf), so scenes can use large maps without shipping
 // multi-megabyte files. Inline: both libspecula and the image-I/O module parse it.

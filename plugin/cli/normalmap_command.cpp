@@ -20,6 +20,7 @@ void addNormalmapCommand(CLI::App& app, int& exitCode) {
         std::string kind = "bumps", out;
         int size = 512;
         int64_t seed = 1;
+        double angle = 0.0;
         bool quiet = false;
     };
     auto o = std::make_shared<Opts>();
@@ -31,15 +32,25 @@ void addNormalmapCommand(CLI::App& app, int& exitCode) {
     cmd->add_option("--seed", o->seed, "Seed (same kind, size and seed give the same file)")
         ->check(CLI::Range(int64_t(0), int64_t(INT64_MAX)));
     cmd->add_option("-o,--output", o->out, "Output file: .exr (float) or .png (16-bit)")->required();
+    auto* angle = cmd->add_option("--angle", o->angle,
+                                  "Brush direction of --kind brushed, degrees from +u towards +v (default 26.565); the "
+                                  "nearest direction that keeps the tile seamless is used and printed");
     cmd->add_flag("--quiet", o->quiet, "Print nothing on success");
-    cmd->callback([o, &exitCode] {
+    cmd->callback([o, angle, &exitCode] {
+        if (angle->count() > 0 && o->kind != "brushed") {
+            std::fprintf(stderr, "specula: error: --angle applies to --kind brushed only (got --kind %s)\n", o->kind.c_str());
+            exitCode = kExitUsage;
+            return;
+        }
         if (!outputFolderExists(o->out)) {
             exitCode = kExitIo;
             return;
         }
         try {
             NormalMapKind kind = parseNormalMapKind(o->kind);
-            NormalMap map = generateNormalMap(kind, o->size, uint64_t(o->seed));
+            double used = 0.0;
+            NormalMap map = angle->count() > 0 ? generateBrushedNormalMap(o->size, uint64_t(o->seed), o->angle, &used)
+                                               : generateNormalMap(kind, o->size, uint64_t(o->seed));
             writeNormalMap(map, o->out);
             if (!o->quiet) {
                 SlopeStats s = slopeStats(map);
@@ -47,6 +58,7 @@ void addNormalmapCommand(CLI::App& app, int& exitCode) {
                             "principal rms (%.4f, %.4f)  hash %016" PRIx64 "\n",
                             o->out.c_str(), o->kind.c_str(), o->size, o->size, o->seed, s.meanX, s.meanY, s.sigmaX(),
                             s.sigmaY(), s.rho(), s.sigmaMajor(), s.sigmaMinor(), normalMapHash(map));
+                if (angle->count() > 0) std::printf("brush angle %.3f deg (asked %.3f)\n", used, o->angle);
             }
         } catch (const NormalMapError& e) {
             std::string msg = e.what();

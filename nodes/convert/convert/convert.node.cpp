@@ -1,6 +1,7 @@
 // Explicit conversions (connections never convert implicitly): convert.<from>_to_<to> for
-// float -> vec2/color3/vector3 (broadcast), color3 <-> vector3, vector3 <-> normal3 (no renormalisation),
-// and convert.color3_to_float (one channel or Rec.709 luminance).
+// float -> vec2/color3/vector3 (broadcast), vec2 -> color3/vector3 (x, y and a third component, e.g. to look at
+// uvs or slopes), color3 <-> vector3, vector3 <-> normal3 (no renormalisation), and convert.color3_to_float (one
+// channel or Rec.709 luminance).
 #include "nodes/node_common.h"
 
 namespace specula::nodes {
@@ -11,6 +12,10 @@ struct FloatIn {
 };
 struct Vec3In {
     Vec3 in;
+};
+struct Vec2In {
+    Vec2 in;
+    float z;
 };
 enum class Channel : int { R, G, B, Luminance };
 struct ChannelIn {
@@ -37,6 +42,9 @@ NodeParams<Vec3In> vec3In(TypeDesc t) {
 }
 const NodeParams<FloatIn> kFloatIn = floatIn(TypeDesc::Float);
 const NodeParams<Vec3In> kVec3In = vec3In(TypeDesc::Vector3);
+const NodeParams<Vec2In> kVec2In = NodeParams<Vec2In>()
+    .v2("in", &Vec2In::in, Vec2(0.f), "value to convert: its x and y").range(-2.f, 2.f)
+    .f("z", &Vec2In::z, 0.f, "the third component").range(-2.f, 2.f);
 const NodeParams<ChannelIn> kChannelIn = NodeParams<ChannelIn>()
     .c3("in", &ChannelIn::in, Vec3(0.f), "value to convert").range(-2.f, 2.f)
     .choice("channel", &ChannelIn::channel, "which channel");
@@ -49,6 +57,10 @@ struct Broadcast {
         setSingleOutput(c, i, o);
     }
 };
+void extend2(EvalContext& c, const Instr& i) {
+    const Vec2In p = kVec2In.read(c, i);
+    setSingleOutput(c, i, Vec3(p.in.x, p.in.y, p.z));
+}
 void copy3(EvalContext& c, const Instr& i) { setSingleOutput(c, i, kVec3In.read(c, i).in); }
 void channel(EvalContext& c, const Instr& i) {
     const ChannelIn p = kChannelIn.read(c, i);
@@ -82,6 +94,14 @@ void reg(NodeRegistry& r) {
         s.cpu = &copy3;
         s.glslFunction = "spc_convert_copy";
         r.add(std::move(s));
+    }
+    for (TypeDesc to : {TypeDesc::Color3, TypeDesc::Vector3}) {
+        NodeSpec e = base(TypeDesc::Vec2, to, std::string("A vec2's x and y as the first two components of a ") +
+                                                  typeName(to) + ", z the third (e.g. uvs shown as red and green).");
+        e.inputs = kVec2In.ports();
+        e.cpu = &extend2;
+        e.glslFunction = "spc_convert_extend";
+        r.add(std::move(e));
     }
     NodeSpec s = base(TypeDesc::Color3, TypeDesc::Float, "One channel of a color3, or its Rec.709 luminance.");
     s.inputs = kChannelIn.ports();
