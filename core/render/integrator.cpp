@@ -93,11 +93,24 @@ Ray shadowRay(const ShadingPoint& sp, const LightSample& ls) {
 
 }  // namespace
 
+// A camera ray passes through the geometry of lights the camera does not see (Light::cameraVisible): the ray is
+// traced again beyond each such hit (the same ray, a larger tMin, so its differentials stay the camera's).
+bool Integrator::intersectFromCamera(const Ray& cameraRay, Hit& hit) const {
+    Ray r = cameraRay;
+    for (int pass = 0; pass < 64; ++pass) {
+        if (!accel_.intersect(r, hit)) return false;
+        const int light = scene_.shapes[hit.shape].areaLight;
+        if (light < 0 || scene_.lights[size_t(light)]->cameraVisible) return true;
+        r.tMin = std::nextafter(hit.t, std::numeric_limits<float>::infinity()) * (1.f + 1e-6f);
+    }
+    return false;  // 64 invisible lights in a row: treated as a miss
+}
+
 SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampler, ScratchArena& arena,
                            const QuadRays* quad) const {
     SampleValue out;
     Hit hit;
-    if (!accel_.intersect(cameraRay, hit)) {
+    if (!intersectFromCamera(cameraRay, hit)) {
         out.beauty = environment(glm::normalize(cameraRay.d));
         return out;
     }
@@ -134,7 +147,7 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
                 // Raster: the partner is a helper invocation of this pixel's triangle (its plane, extrapolated),
                 // as on a GPU; otherwise the partner's own hit.
                 if (raster_ ? !accel_.extrapolate(quad->ray[k], hit, hn)
-                            : (!accel_.intersect(quad->ray[k], hn) || scene_.shapes[hn.shape].areaLight >= 0))
+                            : (!intersectFromCamera(quad->ray[k], hn) || scene_.shapes[hn.shape].areaLight >= 0))
                     continue;
                 ShadingPoint spn = accel_.shadingPoint(quad->ray[k], hn);
                 Closure partner;

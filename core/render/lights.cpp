@@ -230,6 +230,7 @@ RasterLight QuadLight::raster() const {
     r.edgeV = ev_;
     r.value = L_;
     r.twoSided = twoSided_;
+    r.cameraVisible = cameraVisible;
     return r;
 }
 

@@ -29,6 +29,7 @@ struct RasterLight {
     Color3 value{0.f};                 // W/sr (point, spot), W/m² (directional), W/(m²·sr) (quad, environment)
     float cosOuter = -1.f, cosInner = -1.f;  // spot cone
     bool twoSided = false;
+    bool cameraVisible = true;         // quad: drawn as an emitter for the camera (Light::cameraVisible)
     bool hasMap = false;               // environment with an image (the rasteriser lights with its mean radiance)
     // Environment map (hasMap): the lat-long texels (rows top to bottom, RGB), looked up by the nearest texel as
     // EnvironmentLight::radiance does, times mapScale, the map turned by mapRotation (radians) about +z.
@@ -54,6 +55,9 @@ public:
     virtual int polygon(const Vec3& p, Vec3* vertices, Color3& radiance) const { return 0; }
     virtual RasterLight raster() const = 0;
     std::string name;
+    // Seen by camera rays (Blender's ray visibility "Camera"): an invisible quad light still lights the scene and shows
+    // in reflections, but camera rays pass through its geometry (its front and its black back).
+    bool cameraVisible = true;
 };
 
 class PointLight final : public Light {

@@ -287,7 +287,7 @@ void readLight(const Json& j, const std::string& ptr, Context& ctx) {
         r.require("irradiance");
         light = std::make_unique<DirectionalLight>(d, r.color("color", Color3(1.f)) * r.number("irradiance", 1.f, 0.f, 1e12f));
     } else if (type == "quad") {
-        JsonReader r(j, ptr, {"type", "name", "position", "look_at", "up", "size", "radiance", "power", "color", "two_sided"});
+        JsonReader r(j, ptr, {"type", "name", "position", "look_at", "up", "size", "radiance", "power", "color", "two_sided", "visible"});
         Vec3 c = r.requiredVec3("position"), at = r.requiredVec3("look_at");
         Vec3 n = at - c;
         if (glm::length(n) < 1e-9f) r.fail("look_at", "look_at equals position");
@@ -305,6 +305,7 @@ void readLight(const Json& j, const std::string& ptr, Context& ctx) {
         Vec3 eu = ex * size[0], ev = ey * size[1];
         Vec3 corner = c - 0.5f * eu - 0.5f * ev;
         light = std::make_unique<QuadLight>(corner, eu, ev, L, twoSided);
+        light->cameraVisible = r.boolean("visible", true);
         // The emitter is visible geometry too.
         ShapeInstance sh;
         sh.name = "light:" + std::to_string(s.lights.size());

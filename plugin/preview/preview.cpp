@@ -730,6 +730,7 @@ double PreviewRenderer::draw(const CameraDesc& cameraDesc, int W, int H) {
         const ShapeInstance& sh = scene.shapes[i];
         if (sh.areaLight >= 0) {
             const RasterLight& r = st.rasterLights[size_t(sh.areaLight)];
+            if (!r.cameraVisible) continue;  // the camera sees through it (Light::cameraVisible)
             glUseProgram(st.emitterProgram);
             glUniform4f(0, r.value.x, r.value.y, r.value.z, r.twoSided ? 1.f : 0.f);
             Vec3 n = glm::normalize(glm::cross(r.direction, r.edgeV));

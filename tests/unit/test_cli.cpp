@@ -650,3 +650,43 @@ TEST(Cli, CompareMatchesChannelsByNameAndSaysWhatItLeftOut) {
     EXPECT_EQ(test::runCli("compare " + q(dir + "/xyz.exr") + " " + q(dir + "/rgb.exr"), &out), 3) << out;
     EXPECT_NE(out.find("no channel in common"), std::string::npos) << out;
 }
+
+// Issue 17 item 3: "visible": false hides a quad light from camera rays (its black back no longer shows) while it
+// still lights the scene exactly as before.
+TEST(Cli, InvisibleQuadLightsLightTheSceneButCameraRaysPassThrough) {
+    std::string dir = test::tempDir("cli-invisible-light");
+    const std::string scene = R"({
+      "render": {"width": 64, "height": 48, "spp": 4},
+      "camera": {"position": [0, -4, 3], "look_at": [0, 0, 1.2]},
+      "materials": {"g": {"nodes": {"d": {"type": "bsdf.diffuse"}}, "output": "@d.bsdf"}},
+      "shapes": [{"type": "quad", "size": [30, 30], "material": "g"}],
+      "lights": [{"type": "quad", "position": [0, 0, 1.5], "look_at": [0, 0, 0], "size": [1, 1], "power": 20VISIBLE}]})";
+    auto render = [&](const std::string& name, const std::string& visible) {
+        std::string s = scene;
+        s.replace(s.find("VISIBLE"), 7, visible);
+        test::writeFile(dir + "/" + name + ".json", s);
+        std::string out;
+        EXPECT_EQ(test::runCli("render " + q(dir + "/" + name + ".json") + " -o " + q(dir + "/" + name + ".exr") + " --progress none", &out), 0) << out;
+        return readImageSet(dir + "/" + name + ".exr");
+    };
+    ImageSet shown = render("shown", ""), hidden = render("hidden", ", \"visible\": false");
+    // The light's centre in pixels (its top, the unlit back, faces the camera).
+    const Vec4 h = shown.matrices["worldToNDC"] * Vec4(0.f, 0.f, 1.5f, 1.f);
+    const int cx = int(h.x / h.w * 64), cy = int(h.y / h.w * 48);
+    auto beauty = [](const ImageSet& img, int x, int y) {
+        const AovBuffer* b = img.find("beauty");
+        return b->pixels[(size_t(y) * img.width + x) * size_t(b->channels())];
+    };
+    EXPECT_EQ(beauty(shown, cx, cy), 0.f) << "the back of a one-sided light is black";
+    EXPECT_GT(beauty(hidden, cx, cy), 0.001f) << "the lit floor behind the hidden light";
+    // Away from the light's outline the two images are the same (the light lights the floor as before).
+    int same = 0, compared = 0;
+    for (int y = 0; y < 48; ++y)
+        for (int x = 0; x < 64; ++x) {
+            if (std::abs(x - cx) < 14 && std::abs(y - cy) < 14) continue;
+            ++compared;
+            same += beauty(shown, x, y) == beauty(hidden, x, y);
+        }
+    EXPECT_EQ(same, compared);
+    EXPECT_GT(beauty(hidden, 32, 44), 0.01f) << "the floor is lit";
+}
