@@ -93,6 +93,27 @@ Ray shadowRay(const ShadingPoint& sp, const LightSample& ls) {
 
 }  // namespace
 
+// The emission of a mesh light's sample: the shape's material shaded at the sampled point, seen from p. Its lobes go
+// to the vertex's arena (reset with the vertex), so the vertex's own closure stays valid.
+Color3 Integrator::meshLightEmission(const LightSample& ls, const Vec3& p, ScratchArena& arena) const {
+    Hit h;
+    h.shape = uint32_t(ls.shape);
+    h.prim = ls.prim;
+    h.b1 = ls.bary.x;
+    h.b2 = ls.bary.y;
+    h.t = ls.distance;
+    Ray r;
+    r.o = p;
+    r.d = ls.wi;
+    RayDifferential rd;
+    static_cast<Ray&>(rd) = r;
+    const ShadingPoint lp = accel_.shadingPoint(rd, h);
+    Closure unused;
+    Color3 Le(0.f);
+    scene_.materials[size_t(scene_.shapes[size_t(ls.shape)].material)]->shade(lp, arena, unused, &Le);
+    return isFinite(Le) ? Le : Color3(0.f);
+}
+
 // A camera ray passes through the geometry of lights the camera does not see (Light::cameraVisible): the ray is
 // traced again beyond each such hit (the same ray, a larger tMin, so its differentials stay the camera's).
 bool Integrator::intersectFromCamera(const Ray& cameraRay, Hit& hit) const {
@@ -133,6 +154,9 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
     beta.d = beta.s = Color3(1.f);  // split happens at the first scattering event
     Color3 emitted(0.f);
     float prevBsdfPdf = 0.f;
+    Vec3 prevDir(0.f);     // the BSDF-sampled direction that reached this vertex, its distance and triangle (mesh-light MIS)
+    float prevHitT = 0.f;
+    uint32_t prevPrim = 0;
 
     for (int depth = 0;; ++depth) {
         sampler.setDimension(firstBounceDim + uint32_t(depth) * dimsPerBounce_);
@@ -176,10 +200,19 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
         // One shading pass gives the closure and the emission; the shading point stays const while it runs.
         material.shade(sp, arena, closure, material.isEmissive() ? &Le : nullptr);
         if (material.isEmissive()) {
-            if (depth == 0)
+            if (depth == 0) {
                 emitted += Le;
-            else
-                addPathRadiance(out, beta, Le, clamp);
+            } else {
+                // A mesh light was also sampled by next-event estimation at the previous vertex: weigh this BSDF hit by
+                // the power heuristic against that strategy's pdf for the same point.
+                const int ml = scene_.shapes[sp.shapeId].meshLight;
+                float w = 1.f;
+                if (ml >= 0) {
+                    const float lightPdf = static_cast<const MeshLight&>(*scene_.lights[size_t(ml)]).pdfAt(prevDir, prevHitT, prevPrim);
+                    w = powerHeuristic(prevBsdfPdf, lightPdf);
+                }
+                addPathRadiance(out, beta, Le * w, clamp);
+            }
         }
         const Vec3 wo = sp.wo;
         if (depth == 0) {
@@ -280,9 +313,11 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
                     continue;
                 }
             }
-            if (!light.sample(sp.pGeom, u, ls) || !(ls.pdf > 0.f) || maxComponent(ls.L) <= 0.f) continue;
+            if (!light.sample(sp.pGeom, u, ls) || !(ls.pdf > 0.f)) continue;
             // Reject directions on the wrong side of the geometric surface (light leaks through normals).
             if (glm::dot(ls.wi, sp.ng) <= 0.f) continue;
+            if (ls.shape >= 0) ls.L = meshLightEmission(ls, sp.pGeom, arena);
+            if (maxComponent(ls.L) <= 0.f) continue;
             q.wi = ls.wi;
             // Delta lights only: area/environment lights are also reached by BSDF sampling (where dwi = 0), and MIS
             // needs one f for both strategies (filtered-ggx.md §5.1).
@@ -290,7 +325,8 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
             BsdfValue v = closure.evalPdf(q);
             if (maxComponent(v.f.total()) <= 0.f) continue;
             if (accel_.occluded(shadowRay(sp, ls))) continue;
-            float w = ls.delta ? 1.f : powerHeuristic(ls.pdf, v.pdf);
+            // A mesh light's emission is found by BSDF sampling only below the last vertex: there the sample is alone.
+            float w = ls.delta || (light.isMesh() && depth >= maxDepth_) ? 1.f : powerHeuristic(ls.pdf, v.pdf);
             addLightSample(out, beta, depth, v.f, ls.L * (w / ls.pdf), clamp);
         }
 
@@ -300,7 +336,7 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
             bool useful = false;
             for (size_t li = 0; li < scene_.lights.size() && !useful; ++li) {
                 const Light& l = *scene_.lights[li];
-                if (l.isDelta()) continue;
+                if (l.isDelta() || l.isMesh()) continue;  // a mesh light's hit counts only inside max_depth
                 useful = li >= kMaxAnalyticLights || (closure.allLobes() & ~analytic[li]) != 0;
             }
             if (!useful) break;
@@ -380,6 +416,9 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
             beta.d /= (1.f - q);
             beta.s /= (1.f - q);
         }
+        prevDir = wiW;
+        prevHitT = h.t;
+        prevPrim = h.prim;
         sp = accel_.shadingPoint(next, h);
         // Secondary vertices: the camera's footprint at that point (pbrt-v4's approximation), so filtered lobes, glints
         // and textures seen in mirrors or through bounces get a footprint; dwo is not differentiated there.
@@ -489,6 +528,7 @@ void Integrator::rasterLighting(const ShadingPoint& sp, const Closure& closure, 
                 if (glm::dot(wi, sp.ng) > 0.f) add(direction(wi, std::numeric_limits<float>::infinity()), Lp * solidAngle);
                 break;
             }
+            case RasterLight::Kind::Mesh: break;  // the rasteriser does not light with emissive meshes
             case RasterLight::Kind::Environment: {
                 if (!r.hasMap && maxComponent(r.value) <= 0.f) break;
                 const Vec3 t = sp.frame.t, b = sp.frame.b, nn = sp.frame.n;

@@ -57,6 +57,7 @@ private:
     // Radiance arriving from escaped rays (sum over environment lights).
     Color3 environment(const Vec3& dir) const;
     bool intersectFromCamera(const Ray& cameraRay, Hit& hit) const;
+    Color3 meshLightEmission(const LightSample& ls, const Vec3& p, ScratchArena& arena) const;
     // render.integrator "raster": the GPU preview's direct lighting at a camera hit, delta lights shadowed by the
     // preview's shadow maps (docs/preview.md).
     void rasterLighting(const ShadingPoint& sp, const Closure& closure, SampleValue& out) const;

@@ -1,6 +1,8 @@
 // Light sampling: delta lights, area-sampled quads, importance-sampled environment maps.
 #include "core/render/lights.h"
 
+#include <algorithm>
+
 #include "core/render/environment_prefilter.h"
 
 #include "core/render/sampling.h"
@@ -231,6 +233,67 @@ RasterLight QuadLight::raster() const {
     r.value = L_;
     r.twoSided = twoSided_;
     r.cameraVisible = cameraVisible;
+    return r;
+}
+
+MeshLight::MeshLight(int shape, const std::vector<Vec3>& positions, const std::vector<glm::uvec3>& indices)
+    : shape_(shape) {
+    std::vector<float> areas;
+    areas.reserve(indices.size());
+    double total = 0.0;
+    for (const auto& t : indices) {
+        const Vec3 p0 = positions[t.x], e1 = positions[t.y] - p0, e2 = positions[t.z] - p0;
+        p0_.push_back(p0);
+        e1_.push_back(e1);
+        e2_.push_back(e2);
+        const float a = 0.5f * glm::length(glm::cross(e1, e2));
+        areas.push_back(std::isfinite(a) ? a : 0.f);
+        total += areas.back();
+    }
+    area_ = float(total);
+    if (area_ > 0.f) byArea_ = Distribution1D(std::move(areas));
+}
+
+bool MeshLight::sample(const Vec3& p, const Vec2& u, LightSample& s) const {
+    if (!(area_ > 0.f)) return false;
+    float cellPdf = 0.f;
+    int tri = 0;
+    const float x = byArea_.sample(u.x, cellPdf, tri);
+    // The first coordinate's position inside its cell, reused (it is uniform there), and the second: a uniform point
+    // on the triangle by the square-root map (pbrt-v4's SampleUniformTriangle).
+    const int n = byArea_.size();
+    const float ux = std::clamp(x * float(n) - float(tri), 0.f, 1.f - 1e-7f);
+    const float su = std::sqrt(ux);
+    const float b1 = su * (1.f - u.y), b2 = su * u.y;  // weights of vertices 1 and 2 (b0 = 1 - su)
+    const Vec3 q = p0_[size_t(tri)] + b1 * e1_[size_t(tri)] + b2 * e2_[size_t(tri)];
+    const Vec3 d = q - p;
+    const float dist2 = glm::dot(d, d);
+    if (!(dist2 > 0.f)) return false;
+    const float dist = std::sqrt(dist2);
+    s.wi = d / dist;
+    s.distance = dist;
+    s.pdf = pdfAt(s.wi, dist, uint32_t(tri));
+    s.L = Color3(0.f);
+    s.delta = false;
+    s.shape = shape_;
+    s.prim = uint32_t(tri);
+    s.bary = Vec2(b1, b2);
+    return s.pdf > 0.f && std::isfinite(s.pdf);
+}
+
+// Area pdf 1/A turned into solid angle at p: t² / (|cos θ_light| A). Both sides emit (bsdf.emission is two-sided).
+float MeshLight::pdfAt(const Vec3& wi, float t, uint32_t prim) const {
+    if (prim >= e1_.size() || !(area_ > 0.f)) return 0.f;
+    const Vec3 ng = glm::cross(e1_[prim], e2_[prim]);
+    const float len = glm::length(ng);
+    const float c = len > 0.f ? std::abs(glm::dot(wi, ng)) / len : 0.f;
+    if (!(c > 0.f)) return 0.f;
+    return t * t / (c * area_);
+}
+
+RasterLight MeshLight::raster() const {
+    RasterLight r;
+    r.kind = RasterLight::Kind::Mesh;
     return r;
 }
 

@@ -17,12 +17,18 @@ struct LightSample {
     Color3 L{0.f};      // incident radiance (delta lights: intensity/d² or irradiance, with pdf = 1)
     float pdf = 0.f;    // solid-angle pdf; 1 for delta lights
     bool delta = false;
+    // Mesh lights: the sampled point (shape, triangle, barycentrics of its vertices 1 and 2). L is left 0: the
+    // integrator shades the shape's material there for its emission.
+    int shape = -1;
+    uint32_t prim = 0;
+    Vec2 bary{0.f};
 };
 
 // A light as a rasteriser sees it (the GPU preview and the CPU "raster" integrator that matches it): the parameters
 // of the closed-form light models, no sampling. Environment maps are described by their constant part only.
 struct RasterLight {
-    enum class Kind { Point, Spot, Directional, Quad, Environment } kind = Kind::Point;
+    // Mesh: an emissive mesh, which the rasteriser does not light with (docs/preview.md); always after the others.
+    enum class Kind { Point, Spot, Directional, Quad, Environment, Mesh } kind = Kind::Point;
     Vec3 position{0.f};                // point, spot; quad: the corner
     Vec3 direction{0.f, 0.f, -1.f};    // spot: cone axis; directional: towards the light; quad: edge u
     Vec3 edgeV{0.f};                   // quad: edge v (emits on the side of cross(edgeU, edgeV), or both)
@@ -50,6 +56,7 @@ public:
     virtual Color3 radiance(const Vec3& wi, bool frontSide = true) const { return Color3(0.f); }
     virtual bool isDelta() const { return false; }
     virtual bool isEnvironment() const { return false; }
+    virtual bool isMesh() const { return false; }  // MeshLight: its emission comes from the shape's material
     // Polygonal emitters: if p sees the emitting side, writes the polygon (world space, at most 4
     // vertices, counter-clockwise seen from p), its constant radiance, and returns the vertex count.
     virtual int polygon(const Vec3& p, Vec3* vertices, Color3& radiance) const { return 0; }
@@ -119,6 +126,28 @@ private:
     float area_;
     Color3 L_;
     bool twoSided_;
+};
+
+// An emissive mesh as a light (issue 17 item 3): next-event estimation picks a triangle in proportion to its area and
+// a uniform point on it; the emission there is the shape's material's (shaded by the integrator), so textured
+// emission works. Its triangles are the shape's world-space mesh.
+class MeshLight final : public Light {
+public:
+    MeshLight(int shape, const std::vector<Vec3>& positions, const std::vector<glm::uvec3>& indices);
+    bool sample(const Vec3& p, const Vec2& u, LightSample& s) const override;
+    // Solid-angle pdf of sampling the point a ray along wi hits at distance t on triangle 'prim' (its own normal, as
+    // sample() uses, not the exact surface's of a built-in shape).
+    float pdfAt(const Vec3& wi, float t, uint32_t prim) const;
+    RasterLight raster() const override;
+    bool isMesh() const override { return true; }
+    int shape() const { return shape_; }
+    float area() const { return area_; }
+
+private:
+    int shape_;
+    std::vector<Vec3> p0_, e1_, e2_;  // per triangle: vertex 0 and the edges to vertices 1 and 2
+    Distribution1D byArea_;
+    float area_ = 0.f;
 };
 
 class EnvironmentLight final : public Light {

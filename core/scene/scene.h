@@ -45,6 +45,9 @@ struct RenderSettings {
     // "area_lights": quad lights integrated analytically by the lobes that can (LTC, with the shadow ratio of Heitz,
     // Hill & McGuire 2018) or sampled only; "ltc_horizon": exact clipping or the clip-free sphere approximation.
     AreaLightMode areaLights = AreaLightMode::Ltc;
+    // "mesh_lights": shapes whose material emits are also sampled as lights (next-event estimation with MIS); false:
+    // their light is found only by paths that hit them.
+    bool meshLights = true;
     uint8_t ltcHorizon = 0;    // ltc::Horizon: 0 clip, 1 clipless
     // "ltc_max_depth": the deepest path vertex (0 = the camera hit) that integrates quad lights analytically; deeper
     // vertices sample them (their light is already noisy, and the analytic path costs a polygon sample and a shadow
@@ -76,6 +79,7 @@ struct ShapeInstance {
     int areaLight = -1;        // index into Scene::lights for emitting quads
     std::string meshFile;      // the file of a "mesh" shape ("" for built-in shapes)
     MeshAttributeSources attributes;  // where a mesh file's normals, uvs and tangents came from
+    int meshLight = -1;        // index into Scene::lights of this shape's MeshLight (emissive material), or -1
 };
 
 struct Scene {

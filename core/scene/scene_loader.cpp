@@ -54,7 +54,7 @@ std::string fileMustExist(const Context& ctx, const JsonReader& r, const std::st
 void readRender(const Json& j, Scene& s) {
     JsonReader r(j, "/render",
                  {"width", "height", "spp", "seed", "tile", "integrator", "max_depth", "filter", "gaussian_sigma2",
-                  "pixel_center", "clamp_indirect", "derivatives", "area_lights", "ltc_horizon", "ltc_max_depth", "ltc_shadow_rays",
+                  "pixel_center", "clamp_indirect", "derivatives", "area_lights", "mesh_lights", "ltc_horizon", "ltc_max_depth", "ltc_shadow_rays",
                   "shadow_map_size"});
     RenderSettings& rs = s.render;
     rs.width = r.integer("width", rs.width, 1, kMaxDimension);
@@ -78,6 +78,7 @@ void readRender(const Json& j, Scene& s) {
     rs.clampIndirect = r.number("clamp_indirect", 0.f, 0.f, 1e9f);
     // "area_lights": "ltc" (lobes with a closed form integrate quad lights, with stochastic shadows) | "sampled"
     rs.areaLights = r.enumeration("area_lights", "ltc", {"ltc", "sampled"}) == "ltc" ? AreaLightMode::Ltc : AreaLightMode::Sampled;
+    rs.meshLights = r.boolean("mesh_lights", true);
     rs.ltcHorizon = r.enumeration("ltc_horizon", "clip", {"clip", "clipless"}) == "clip" ? 0 : 1;
     rs.ltcMaxDepth = r.integer("ltc_max_depth", rs.ltcMaxDepth, 0, 1024);
     rs.ltcShadowRays = r.integer("ltc_shadow_rays", rs.ltcShadowRays, 1, 64);
@@ -556,6 +557,17 @@ Scene loadSceneFromString(const std::string& text, const std::string& baseDir, c
         if (!lights.is_array()) throw InputError("/lights", "expected an array of lights, got " + jsonTypeName(lights));
         for (size_t i = 0; i < lights.size(); ++i) readLight(lights[i], "/lights/" + std::to_string(i), ctx);
     }
+    // Emissive shapes become mesh lights, after every other light (the rasteriser's light list ends before them).
+    if (scene.render.meshLights && scene.render.integrator != IntegratorKind::Raster)
+        for (size_t i = 0; i < scene.shapes.size(); ++i) {
+            ShapeInstance& sh = scene.shapes[i];
+            if (sh.areaLight >= 0 || sh.material < 0 || !scene.materials[size_t(sh.material)]->isEmissive()) continue;
+            auto light = std::make_unique<MeshLight>(int(i), sh.mesh.positions, sh.mesh.indices);
+            if (!(light->area() > 0.f)) continue;
+            light->name = "mesh light '" + sh.name + "' (material '" + scene.materials[size_t(sh.material)]->name() + "')";
+            sh.meshLight = int(scene.lights.size());
+            scene.lights.push_back(std::move(light));
+        }
     return scene;
 }
 

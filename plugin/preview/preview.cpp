@@ -592,6 +592,7 @@ PreviewRenderer::PreviewRenderer(const Scene& scene, const nlohmann::json& mater
     for (const auto& light : scene.lights) st.rasterLights.push_back(light->raster());
     int count = 0;
     for (const RasterLight& r : st.rasterLights) {
+        if (r.kind == RasterLight::Kind::Mesh) break;  // mesh lights come last; the preview does not light with them
         if (r.kind == RasterLight::Kind::Environment) {
             if (r.hasMap) {
                 if (st.map) throw InputError("/lights", "the preview shows one environment map (the scene has several)");

@@ -690,3 +690,49 @@ TEST(Cli, InvisibleQuadLightsLightTheSceneButCameraRaysPassThrough) {
     EXPECT_EQ(same, compared);
     EXPECT_GT(beauty(hidden, 32, 44), 0.01f) << "the floor is lit";
 }
+
+// Issue 17 item 3: an emissive mesh is sampled as a light (next-event estimation with MIS). A diffuse floor (albedo
+// 0.8) under an emitting sphere (radiance 10, radius 0.25, centre 1.5 above it): the radiance leaving the floor point
+// below is rho L sin^2(alpha) = 0.8 * 10 * (0.25 / 1.5)^2 = 0.2222 (the sphere subtends a cap of half-angle alpha). The
+// direct-lighting and path integrators with mesh lights, and the path integrator finding the sphere only by BSDF
+// hits ("mesh_lights": false), all give it; the mesh light cuts the pixel noise several times.
+TEST(Cli, EmissiveMeshesAreSampledAsLights) {
+    std::string dir = test::tempDir("cli-mesh-lights");
+    auto render = [&](const std::string& integrator, bool meshLights, int spp, double& stddev) {
+        const std::string name = integrator + (meshLights ? "_nee" : "_hits");
+        test::writeFile(dir + "/" + name + ".json", R"({
+          "render": {"width": 8, "height": 8, "spp": )" + std::to_string(spp) + R"(, "integrator": ")" + integrator +
+                                                        R"(", "mesh_lights": )" + (meshLights ? "true" : "false") + R"(},
+          "camera": {"position": [0, -3, 3], "look_at": [0, 0, 0], "fov": 2},
+          "materials": {"e": {"nodes": {"e": {"type": "bsdf.emission", "inputs": {"strength": 10}}}, "output": "@e.bsdf"},
+                        "g": {"nodes": {"d": {"type": "bsdf.diffuse", "inputs": {"color": 0.8}}}, "output": "@d.bsdf"}},
+          "shapes": [{"type": "quad", "size": [20, 20], "material": "g"},
+                     {"type": "sphere", "radius": 0.25, "transform": {"translate": [0, 0, 1.5]}, "material": "e"}]})");
+        std::string out;
+        EXPECT_EQ(test::runCli("render " + q(dir + "/" + name + ".json") + " -o " + q(dir + "/" + name + ".exr") + " --progress none", &out), 0) << out;
+        ImageSet img = readImageSet(dir + "/" + name + ".exr");
+        const AovBuffer* b = img.find("beauty");
+        double sum = 0, sum2 = 0;
+        const int n = img.width * img.height;
+        for (int i = 0; i < n; ++i) {
+            const double v = b->pixels[size_t(i) * size_t(b->channels())];
+            sum += v, sum2 += v * v;
+        }
+        stddev = std::sqrt(std::max(0.0, sum2 / n - (sum / n) * (sum / n)));
+        return sum / n;
+    };
+    const double expected = 0.8 * 10 * (0.25 / 1.5) * (0.25 / 1.5);
+    double sdDirect = 0, sdPath = 0, sdHits = 0, sdHitsSameSpp = 0;
+    const double direct = render("direct", true, 512, sdDirect), path = render("path", true, 512, sdPath);
+    const double hits = render("path", false, 2048, sdHits);
+    render("path", false, 512, sdHitsSameSpp);
+    std::printf("mesh light: direct %.4f (pixel sd %.4f), path %.4f (%.4f), BSDF hits only %.4f (%.4f at 512 spp); "
+                "expected %.4f\n", direct, sdDirect, path, sdPath, hits, sdHitsSameSpp, expected);
+    EXPECT_NEAR(direct, expected, 0.03 * expected);
+    EXPECT_NEAR(path, expected, 0.03 * expected);
+    EXPECT_NEAR(hits, expected, 0.06 * expected);
+    EXPECT_LT(sdPath, 0.5 * sdHitsSameSpp) << "next-event estimation of the mesh light reduces the noise";
+    // Without mesh lights the direct integrator never sees the sphere's light.
+    double sd = 0;
+    EXPECT_EQ(render("direct", false, 16, sd), 0.0);
+}
