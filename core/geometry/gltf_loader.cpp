@@ -30,6 +30,13 @@ bool ignoreImage(tinygltf::Image*, const int, std::string*, std::string*, int, i
                  void*) {
     return true;
 }
+// Scene import keeps each image's encoded bytes (embedded, in a GLB buffer or an external file read through the
+// confined file callbacks below) so that they can be written for the texture store; nothing is decoded here.
+bool keepImageBytes(tinygltf::Image* image, const int, std::string*, std::string*, int, int, const unsigned char* bytes,
+                    int size, void*) {
+    if (image && bytes && size > 0) image->image.assign(bytes, bytes + size);
+    return true;
+}
 
 std::string trimmed(std::string s) {
     while (!s.empty() && (s.back() == '\n' || s.back() == '\r' || s.back() == ' ')) s.pop_back();
@@ -136,7 +143,8 @@ struct AccessorView {
 
 class GltfImporter {
 public:
-    GltfImporter(const std::string& path, const tinygltf::Model& model) : path_(path), m_(model) {}
+    GltfImporter(const std::string& path, const tinygltf::Model& model, int materialFilter)
+        : path_(path), m_(model), materialFilter_(materialFilter) {}
 
     TriangleMesh run() {
         std::vector<int> roots;
@@ -159,16 +167,20 @@ public:
         }
         for (int r : roots) visit(r, glm::dmat4(1.0), 0);
         if (parts_.empty())
-            throwMeshError(path_, skippedPrimitives_ ? "no triangles (only non-triangle primitives)" : "no triangles");
+            throwMeshError(path_, materialFilter_ != kAllGltfMaterials
+                                      ? "no triangles with material " + std::to_string(materialFilter_)
+                                      : skippedPrimitives_ ? "no triangles (only non-triangle primitives)" : "no triangles");
         return mergeMeshParts(parts_);
     }
 
 private:
     const std::string& path_;
     const tinygltf::Model& m_;
+    int materialFilter_;
     std::vector<TriangleMesh> parts_;
     int skippedPrimitives_ = 0;
 
+public:
     static glm::dmat4 localTransform(const tinygltf::Node& node) {
         if (node.matrix.size() == 16) {
             glm::dmat4 M;
@@ -190,6 +202,8 @@ private:
         }
         return T * R * S;  // glTF: M = T * R * S
     }
+
+private:
 
     void visit(int nodeIndex, const glm::dmat4& parent, size_t depth) {
         if (nodeIndex < 0 || size_t(nodeIndex) >= m_.nodes.size())
@@ -249,6 +263,7 @@ private:
                 ++skippedPrimitives_;
                 continue;
             }
+            if (materialFilter_ != kAllGltfMaterials && prim.material != materialFilter_) continue;
             auto attr = [&](const char* name) {
                 auto it = prim.attributes.find(name);
                 return it == prim.attributes.end() ? -1 : it->second;
@@ -330,9 +345,8 @@ private:
 
 }  // namespace
 
-TriangleMesh loadGltfMesh(const std::string& path, bool binary) {
-    tinygltf::TinyGLTF loader;
-    loader.SetImageLoader(&ignoreImage, nullptr);
+namespace {
+BufferAccess accessFor(const std::string& path) {
     BufferAccess access;
     access.baseDir = tinygltf::GetBaseDir(path);
     std::error_code ec;
@@ -344,8 +358,14 @@ TriangleMesh loadGltfMesh(const std::string& path, bool binary) {
     for (auto& root : access.roots)
         if (root.has_parent_path() && root.filename().empty()) root = root.parent_path();  // "dir/" -> "dir"
     }
+    return access;
+}
+
+void loadModel(const std::string& path, bool binary, bool keepImages, tinygltf::Model& model) {
+    tinygltf::TinyGLTF loader;
+    loader.SetImageLoader(keepImages ? &keepImageBytes : &ignoreImage, nullptr);
+    BufferAccess access = accessFor(path);
     loader.SetFsCallbacks({&bufferExists, &expandNothing, &readBuffer, nullptr, &access});
-    tinygltf::Model model;
     std::string err, warn;
     bool ok = false;
     try {
@@ -359,7 +379,149 @@ TriangleMesh loadGltfMesh(const std::string& path, bool binary) {
         throwMeshError(path, "a buffer URI leads outside the glTF file's folder; buffers are read only from that folder "
                              "and from the folders listed in SPECULA_RESOURCE_PATH (docs/scene-format.md)");
     if (!ok) throwMeshError(path, "glTF parse error: " + (err.empty() ? std::string("unknown error") : trimmed(err)));
-    return GltfImporter(path, model).run();
+}
+}  // namespace
+
+TriangleMesh loadGltfMesh(const std::string& path, bool binary, int materialFilter) {
+    tinygltf::Model model;
+    loadModel(path, binary, false, model);
+    return GltfImporter(path, model, materialFilter).run();
+}
+
+namespace {
+// The nodes the default scene instances (all scenes' without a default; without scenes every root node).
+std::vector<int> rootNodes(const tinygltf::Model& m) {
+    std::vector<int> roots;
+    if (!m.scenes.empty()) {
+        if (m.defaultScene >= 0 && size_t(m.defaultScene) < m.scenes.size()) return m.scenes[size_t(m.defaultScene)].nodes;
+        for (const auto& scene : m.scenes) roots.insert(roots.end(), scene.nodes.begin(), scene.nodes.end());
+        return roots;
+    }
+    std::vector<bool> isChild(m.nodes.size(), false);
+    for (const auto& node : m.nodes)
+        for (int c : node.children)
+            if (c >= 0 && size_t(c) < isChild.size()) isChild[size_t(c)] = true;
+    for (size_t i = 0; i < m.nodes.size(); ++i)
+        if (!isChild[i]) roots.push_back(int(i));
+    return roots;
+}
+
+Vec3 factor3(const std::vector<double>& v, Vec3 def) {
+    return v.size() >= 3 ? Vec3(float(v[0]), float(v[1]), float(v[2])) : def;
+}
+}  // namespace
+
+GltfSceneInfo describeGltfScene(const std::string& path, bool binary,
+                                const std::function<std::string(const std::vector<unsigned char>&, const std::string&)>& saveImage) {
+    tinygltf::Model m;
+    loadModel(path, binary, true, m);
+    GltfSceneInfo info;
+    // Images as files the texture store can read: external ones where they are (inside the folders buffers may come
+    // from, as for buffers), embedded ones written by the caller; one per glTF image that a material uses.
+    const BufferAccess access = accessFor(path);
+    std::vector<std::string> imageFiles(m.images.size());
+    auto externalImage = [&](const std::string& uri) {
+        std::string decoded;  // percent-decoding (RFC 3986), as tinygltf decodes buffer URIs
+        for (size_t i = 0; i < uri.size(); ++i) {
+            if (uri[i] == '%' && i + 2 < uri.size() && std::isxdigit(static_cast<unsigned char>(uri[i + 1])) &&
+                std::isxdigit(static_cast<unsigned char>(uri[i + 2]))) {
+                decoded += char(std::stoi(uri.substr(i + 1, 2), nullptr, 16));
+                i += 2;
+            } else {
+                decoded += uri[i];
+            }
+        }
+        const std::string file = !decoded.empty() && decoded[0] == '/' ? decoded : tinygltf::JoinPath(access.baseDir, decoded);
+        std::error_code ec;
+        if (!access.inside(file) || !std::filesystem::is_regular_file(file, ec))
+            throwMeshError(path, "image URI '" + uri + "' is not a file inside the glTF file's folder or SPECULA_RESOURCE_PATH");
+        return std::filesystem::weakly_canonical(file, ec).string();
+    };
+    auto textureFile = [&](int textureIndex) -> std::string {
+        if (textureIndex < 0 || size_t(textureIndex) >= m.textures.size()) return "";
+        const int source = m.textures[size_t(textureIndex)].source;
+        if (source < 0 || size_t(source) >= m.images.size()) return "";
+        const tinygltf::Image& img = m.images[size_t(source)];
+        if (imageFiles[size_t(source)].empty() && img.image.empty() && !img.uri.empty() && img.uri.rfind("data:", 0) != 0)
+            imageFiles[size_t(source)] = externalImage(img.uri);
+        if (imageFiles[size_t(source)].empty()) {
+            if (img.image.empty()) return "";
+            std::string ext = img.mimeType == "image/jpeg" ? ".jpg" : img.mimeType == "image/png" ? ".png" : "";
+            if (ext.empty() && !img.uri.empty() && img.uri.rfind("data:", 0) != 0)
+                ext = std::filesystem::path(img.uri).extension().string();
+            imageFiles[size_t(source)] = saveImage(img.image, ext.empty() ? ".png" : ext);
+        }
+        return imageFiles[size_t(source)];
+    };
+    for (const tinygltf::Material& mat : m.materials) {
+        GltfSceneInfo::Material out;
+        out.name = mat.name;
+        const auto& pbr = mat.pbrMetallicRoughness;
+        if (pbr.baseColorFactor.size() == 4)
+            out.baseColor = Vec4(float(pbr.baseColorFactor[0]), float(pbr.baseColorFactor[1]), float(pbr.baseColorFactor[2]),
+                                 float(pbr.baseColorFactor[3]));
+        out.metallic = float(pbr.metallicFactor);
+        out.roughness = float(pbr.roughnessFactor);
+        out.baseColorTexture = textureFile(pbr.baseColorTexture.index);
+        out.metallicRoughnessTexture = textureFile(pbr.metallicRoughnessTexture.index);
+        out.normalTexture = textureFile(mat.normalTexture.index);
+        out.normalScale = float(mat.normalTexture.scale);
+        out.emissive = factor3(mat.emissiveFactor, Vec3(0.f));
+        out.emissiveTexture = textureFile(mat.emissiveTexture.index);
+        if (auto it = mat.extensions.find("KHR_materials_emissive_strength"); it != mat.extensions.end() &&
+                                                                              it->second.Has("emissiveStrength"))
+            out.emissive *= float(it->second.Get("emissiveStrength").GetNumberAsDouble());
+        info.materials.push_back(std::move(out));
+    }
+    // Walk the instanced node tree: cameras, lights, and which materials triangles use, with world bounds.
+    std::vector<char> used(m.materials.size() + 1, 0);  // [0] = no material
+    bool any = false;
+    std::vector<std::pair<int, glm::dmat4>> stack;
+    for (int r : rootNodes(m)) stack.emplace_back(r, glm::dmat4(1.0));
+    size_t visits = 0;
+    while (!stack.empty()) {
+        auto [index, parent] = stack.back();
+        stack.pop_back();
+        if (index < 0 || size_t(index) >= m.nodes.size()) throwMeshError(path, "node index " + std::to_string(index) + " out of range");
+        if (++visits > 4 * m.nodes.size() + 16) throwMeshError(path, "node hierarchy contains a cycle");
+        const tinygltf::Node& node = m.nodes[size_t(index)];
+        const glm::dmat4 M = parent * GltfImporter::localTransform(node);
+        if (node.camera >= 0 && size_t(node.camera) < m.cameras.size() && m.cameras[size_t(node.camera)].type == "perspective") {
+            const auto& pc = m.cameras[size_t(node.camera)].perspective;
+            info.cameras.push_back({M, pc.yfov, pc.aspectRatio, m.cameras[size_t(node.camera)].name});
+        }
+        if (auto it = node.extensions.find("KHR_lights_punctual"); it != node.extensions.end() && it->second.Has("light")) {
+            const int li = it->second.Get("light").GetNumberAsInt();
+            if (li >= 0 && size_t(li) < m.lights.size()) {
+                const tinygltf::Light& l = m.lights[size_t(li)];
+                info.lights.push_back({l.type, l.name, factor3(l.color, Vec3(1.f)), l.intensity, l.spot.innerConeAngle,
+                                       l.spot.outerConeAngle, M});
+            }
+        }
+        if (node.mesh >= 0 && size_t(node.mesh) < m.meshes.size())
+            for (const tinygltf::Primitive& prim : m.meshes[size_t(node.mesh)].primitives) {
+                if (prim.mode != -1 && prim.mode != TINYGLTF_MODE_TRIANGLES) continue;
+                const int mat = prim.material >= 0 && size_t(prim.material) < m.materials.size() ? prim.material : -1;
+                used[size_t(mat + 1)] = 1;
+                auto pos = prim.attributes.find("POSITION");
+                if (pos == prim.attributes.end() || pos->second < 0 || size_t(pos->second) >= m.accessors.size()) continue;
+                const tinygltf::Accessor& acc = m.accessors[size_t(pos->second)];
+                if (acc.minValues.size() != 3 || acc.maxValues.size() != 3) continue;
+                for (int c = 0; c < 8; ++c) {  // the accessor's box corners, transformed
+                    const glm::dvec4 p = M * glm::dvec4(c & 1 ? acc.maxValues[0] : acc.minValues[0],
+                                                        c & 2 ? acc.maxValues[1] : acc.minValues[1],
+                                                        c & 4 ? acc.maxValues[2] : acc.minValues[2], 1.0);
+                    info.boundsMin = any ? glm::min(info.boundsMin, Vec3(p)) : Vec3(p);
+                    info.boundsMax = any ? glm::max(info.boundsMax, Vec3(p)) : Vec3(p);
+                    any = true;
+                }
+            }
+        for (int c : node.children) stack.emplace_back(c, M);
+    }
+    info.hasBounds = any;
+    for (size_t k = 0; k < used.size(); ++k)
+        if (used[k]) info.usedMaterials.push_back(int(k) - 1);
+    return info;
 }
 
 }  // namespace specula::detail

@@ -490,7 +490,7 @@ const char* attributeSourceName(MeshAttributeSources::Source s) {
     }
 }
 
-TriangleMesh loadMesh(const std::string& path, const MeshShading& shading, MeshAttributeSources* sources) {
+TriangleMesh loadMesh(const std::string& path, const MeshShading& shading, MeshAttributeSources* sources, int gltfMaterial) {
     std::error_code ec;
     if (!std::filesystem::exists(path, ec)) throwMeshError(path, "file not found");
     if (!std::filesystem::is_regular_file(path, ec)) throwMeshError(path, "not a regular file");
@@ -501,11 +501,13 @@ TriangleMesh loadMesh(const std::string& path, const MeshShading& shading, MeshA
     else if (ext == ".ply")
         mesh = loadPly(path);
     else if (ext == ".gltf")
-        mesh = detail::loadGltfMesh(path, false);
+        mesh = detail::loadGltfMesh(path, false, gltfMaterial);
     else if (ext == ".glb")
-        mesh = detail::loadGltfMesh(path, true);
+        mesh = detail::loadGltfMesh(path, true, gltfMaterial);
     else
         throwMeshError(path, "unknown mesh extension '" + ext + "' (expected .obj, .ply, .gltf or .glb)");
+    if (gltfMaterial != kAllGltfMaterials && ext != ".gltf" && ext != ".glb")
+        throwMeshError(path, "a glTF material selection needs a .gltf or .glb file");
     finalizeMesh(mesh, path);
     MeshAttributeSources src;
     completeAttributes(mesh, shading, src);

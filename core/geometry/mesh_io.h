@@ -26,11 +26,43 @@ struct MeshShading {
 
 const char* attributeSourceName(MeshAttributeSources::Source s);
 
+constexpr int kAllGltfMaterials = -2;  // loadMesh's gltfMaterial: every primitive of a glTF file
+
+// A glTF file's cameras, punctual lights and metallic-roughness materials (glTF's y-up world space), for the scene
+// import (core/scene/gltf_scene.h). Textures are files written by the importer.
+struct GltfSceneInfo {
+    struct Camera {
+        glm::dmat4 world;
+        double yfov = 0.7, aspect = 0.0;  // radians; 0: unspecified
+        std::string name;
+    };
+    struct Light {
+        std::string type, name;  // "point", "spot", "directional"
+        Vec3 color{1.f};
+        double intensity = 1.0;  // candela (point, spot) or lux (directional)
+        double innerCone = 0.0, outerCone = 0.7853981633974483;
+        glm::dmat4 world;
+    };
+    struct Material {
+        std::string name;
+        Vec4 baseColor{1.f};
+        float metallic = 1.f, roughness = 1.f, normalScale = 1.f;
+        Vec3 emissive{0.f};
+        std::string baseColorTexture, metallicRoughnessTexture, normalTexture, emissiveTexture;  // "" = none
+    };
+    std::vector<Material> materials;
+    std::vector<int> usedMaterials;  // material indices that triangles use (-1: primitives without a material)
+    std::vector<Camera> cameras;
+    std::vector<Light> lights;
+    bool hasBounds = false;
+    Vec3 boundsMin{0.f}, boundsMax{0.f};
+};
+
 // Loads every triangle of the file into one object-space mesh (glTF node transforms applied,
 // polygons triangulated). Normals follow 'shading'; if the mesh has UVs but no tangents, tangents are computed with
 // computeTangents(). Throws MeshLoadError with the path and reason on failure.
 TriangleMesh loadMesh(const std::string& path, const MeshShading& shading = {},
-                      MeshAttributeSources* sources = nullptr);
+                      MeshAttributeSources* sources = nullptr, int gltfMaterial = kAllGltfMaterials);
 
 // Normals by angle for a mesh without them (Blender's Smooth by Angle): edges whose two triangles meet at more than
 // 'angleDegrees' are creases (0: flat, 180: smooth everywhere); corners around a position joined by smooth edges share

@@ -6,6 +6,7 @@
 #include "core/geometry/mesh_io.h"
 #include "core/geometry/shapes.h"
 #include "core/graph/graph_material.h"
+#include "core/scene/gltf_scene.h"
 #include "core/scene/json_reader.h"
 #include "core/texture/texture_store.h"
 
@@ -206,7 +207,7 @@ void readShape(const Json& j, const std::string& ptr, Context& ctx) {
     else if (type == "disk") keys.push_back("radius");
     else if (type == "cylinder") { keys.push_back("radius"); keys.push_back("height"); }
     else if (type == "torus") { keys.push_back("major_radius"); keys.push_back("minor_radius"); }
-    else if (type == "mesh") { keys.insert(keys.end(), {"file", "shading", "smooth_angle"}); }
+    else if (type == "mesh") { keys.insert(keys.end(), {"file", "shading", "smooth_angle", "gltf_material"}); }
     else
         throw InputError(ptr + "/type", "unknown shape type '" + (type.empty() ? j.at("type").dump() : type) +
                                             "'; valid types: sphere, quad, disk, cylinder, torus, mesh",
@@ -239,8 +240,10 @@ void readShape(const Json& j, const std::string& ptr, Context& ctx) {
         shading.smoothAngleDegrees = r.number("smooth_angle", 30.f, 0.f, 180.f);
         if (r.has("smooth_angle") && shading.mode != MeshShading::Auto)
             r.fail("smooth_angle", "smooth_angle applies to \"shading\": \"auto\" only (this mesh is \"" + mode + "\")");
+        // A glTF file's triangles of one material (the glTF scene import makes one shape per material).
+        const int gltfMaterial = r.has("gltf_material") ? r.integer("gltf_material", -1, -1, 1 << 20) : kAllGltfMaterials;
         try {
-            b.mesh = loadMesh(file, shading, &sh.attributes);
+            b.mesh = loadMesh(file, shading, &sh.attributes, gltfMaterial);
         } catch (const MeshLoadError& e) {
             throw IoError(r.pointer("file") + ": " + e.what());
         }
@@ -577,6 +580,10 @@ constexpr size_t kMaxSceneBytes = size_t(256) << 20;
 Scene loadScene(const std::string& path, const SceneOverrides& overrides) {
     std::error_code ec;
     if (fs::is_directory(path, ec)) throw IoError("scene path '" + path + "' is a folder, not a scene file");
+    if (isGltfScenePath(path)) {  // a glTF file is imported as a scene (docs/scene-format.md "glTF scenes")
+        std::string base = fs::path(path).parent_path().string();
+        return loadSceneFromString(gltfSceneDocument(path).dump(), base.empty() ? "." : base, overrides, path);
+    }
     std::ifstream f(path, std::ios::binary);
     if (!f) throw IoError("cannot open scene file '" + path + "'");
     std::string text;

@@ -2,6 +2,7 @@
 // or interrupted render never touches an existing output file.
 #include "core/color/color_config.h"
 #include "core/io/image_io.h"
+#include "core/scene/gltf_scene.h"
 #include "test_support.h"
 
 #include <gtest/gtest.h>
@@ -21,6 +22,7 @@
 
 using namespace specula;
 namespace fs = std::filesystem;
+constexpr double kPiD = 3.14159265358979323846;
 
 namespace {
 
@@ -735,4 +737,87 @@ TEST(Cli, EmissiveMeshesAreSampledAsLights) {
     // Without mesh lights the direct integrator never sees the sphere's light.
     double sd = 0;
     EXPECT_EQ(render("direct", false, 16, sd), 0.0);
+}
+
+// Issue 17 item 2: a glTF file is a scene. tests/unit/data/gltf/scene.gltf (hand-written: a textured floor with a
+// normal map, a gold cube, a camera, point, spot and directional lights) becomes a z-up scene document: one mesh shape
+// per material, metallic-roughness graphs, lights at 683 lm/W, the camera turned with the geometry. The test then
+// makes its own variants: without a camera (a framing camera sees the cube) and as a .glb.
+TEST(Cli, GltfFilesRenderAsScenes) {
+    const std::string file = test::sourcePath("tests/unit/data/gltf/scene.gltf");
+    const nlohmann::json doc = gltfSceneDocument(file);
+    ASSERT_EQ(doc["shapes"].size(), 2u) << doc.dump(1);
+    EXPECT_EQ(doc["shapes"][1]["gltf_material"], 1);
+    EXPECT_EQ(doc["shapes"][1]["material"], "gold");
+    EXPECT_EQ(doc["shapes"][1]["transform"]["rotate"], nlohmann::json({90, 0, 0}));
+    // Gold: metallic 1 -> no diffuse, F0 = base colour; roughness 0.3 as GGX's perceptual roughness.
+    const nlohmann::json& gold = doc["materials"]["gold"]["nodes"];
+    EXPECT_EQ(gold["diffuse"]["inputs"]["color"], nlohmann::json({0.0, 0.0, 0.0}));
+    EXPECT_NEAR(gold["specular"]["inputs"]["f0"][1].get<double>(), 0.78, 1e-6);
+    EXPECT_NEAR(gold["specular"]["inputs"]["roughness"].get<double>(), 0.3, 1e-6);
+    // The floor: its base colour texture as sRGB, the normal map raw at strength 0.5.
+    const nlohmann::json& floor = doc["materials"]["floor"]["nodes"];
+    EXPECT_EQ(floor["base_image"]["inputs"]["colorspace"], "srgb_texture");
+    EXPECT_EQ(floor["normal_image"]["inputs"]["colorspace"], "raw");
+    EXPECT_EQ(floor["normal_map"]["inputs"]["strength"], 0.5);
+    EXPECT_TRUE(fs::exists(floor["base_image"]["inputs"]["file"].get<std::string>()));
+    // Camera at glTF (0, 2.5, 6) -> (0, -6, 2.5); yfov 0.7 rad; aspect 1.5 -> 810x540.
+    EXPECT_NEAR(doc["camera"]["position"][1].get<double>(), -6.0, 1e-5);
+    EXPECT_NEAR(doc["camera"]["position"][2].get<double>(), 2.5, 1e-5);
+    EXPECT_NEAR(doc["camera"]["fov"].get<double>(), 0.7 * 180 / kPiD, 1e-4);
+    EXPECT_EQ(doc["render"]["width"], 810);
+    // Lights: 2000 cd -> 2000/683 W/sr at glTF (2, 4, 2) -> (2, -2, 4); the sun points down glTF's -y -> -z; the spot's
+    // 0.6 rad outer cone is a 68.75-degree cone with blend 1 - 0.3/0.6.
+    std::map<std::string, nlohmann::json> lights;
+    for (const auto& l : doc["lights"]) lights[l["name"].get<std::string>()] = l;
+    EXPECT_NEAR(lights["lamp"]["intensity"].get<double>(), 2000.0 / 683.0, 1e-6);
+    EXPECT_NEAR(lights["lamp"]["position"][1].get<double>(), -2.0, 1e-5);
+    EXPECT_NEAR(lights["lamp"]["position"][2].get<double>(), 4.0, 1e-5);
+    EXPECT_NEAR(lights["sun"]["irradiance"].get<double>(), 0.1, 1e-9);
+    EXPECT_NEAR(lights["sun"]["direction"][2].get<double>(), -1.0, 1e-5);
+    EXPECT_NEAR(lights["spot"]["cone_angle"].get<double>(), 2 * 0.6 * 180 / kPiD, 1e-4);
+    EXPECT_NEAR(lights["spot"]["blend"].get<double>(), 0.5, 1e-6);
+    EXPECT_EQ(lights["environment"]["type"], "environment");
+
+    // Rendered through the CLI: the gold cube's centre (glTF (0, 1, 0) -> (0, 0, 1)) is gold, not grey.
+    std::string dir = test::tempDir("cli-gltf"), out;
+    auto goldAt = [&](const std::string& path, const std::string& name, float& ratio) {
+        ASSERT_EQ(test::runCli("render " + q(path) + " -o " + q(dir + "/" + name + ".exr") + " --spp 4 --resolution 96x64 --progress none", &out), 0) << out;
+        ImageSet img = readImageSet(dir + "/" + name + ".exr");
+        const Vec4 h = img.matrices["worldToNDC"] * Vec4(0.f, 0.f, 1.f, 1.f);
+        const int x = int(h.x / h.w * float(img.width)), y = int(h.y / h.w * float(img.height));
+        ASSERT_TRUE(x >= 0 && y >= 0 && x < img.width && y < img.height) << name << ": the cube is outside the frame";
+        const AovBuffer* b = img.find("beauty");
+        const float* p = &b->pixels[(size_t(y) * img.width + x) * size_t(b->channels())];
+        ratio = p[0] / std::max(p[2], 1e-6f);
+    };
+    float ratio = 0.f;
+    goldAt(file, "scene", ratio);
+    EXPECT_GT(ratio, 1.5f) << "red over blue at the gold cube";
+    // Made by the test: no camera (the framing camera must see the cube), and a primitive without a material.
+    nlohmann::json g = nlohmann::json::parse(test::readFile(file));
+    for (auto& n : g["nodes"]) n.erase("camera");
+    g["meshes"][0]["primitives"][0].erase("material");
+    for (auto& img : g["images"]) img["uri"] = test::sourcePath("tests/unit/data/gltf/") + img["uri"].get<std::string>();
+    test::writeFile(dir + "/nocamera.gltf", g.dump());
+    // The images' absolute paths lie outside the glTF's folder: refused unless SPECULA_RESOURCE_PATH lists theirs.
+    EXPECT_NE(test::runCli("info " + q(dir + "/nocamera.gltf"), &out), 0) << out;
+    setenv("SPECULA_RESOURCE_PATH", test::sourcePath("tests/unit/data/gltf").c_str(), 1);
+    ASSERT_EQ(test::runCli("info " + q(dir + "/nocamera.gltf"), &out), 0) << out;
+    EXPECT_NE(out.find("material 'default'"), std::string::npos) << out;
+    goldAt(dir + "/nocamera.gltf", "nocamera", ratio);
+    EXPECT_GT(ratio, 1.5f) << "the framing camera sees the gold cube";
+    // The same document as a binary glTF (a GLB of one JSON chunk; its buffer stays a data URI).
+    std::string json = g.dump();
+    while (json.size() % 4) json += ' ';
+    auto u32 = [](uint32_t v) { return std::string(reinterpret_cast<const char*>(&v), 4); };
+    test::writeFile(dir + "/nocamera.glb", "glTF" + u32(2) + u32(uint32_t(12 + 8 + json.size())) + u32(uint32_t(json.size())) +
+                                               "JSON" + json);
+    goldAt(dir + "/nocamera.glb", "glb", ratio);
+    unsetenv("SPECULA_RESOURCE_PATH");
+    EXPECT_GT(ratio, 1.5f) << "the .glb renders as the .gltf";
+    // Not a glTF: a clear I/O error naming the file.
+    test::writeFile(dir + "/broken.gltf", "{\"asset\": ");
+    EXPECT_EQ(test::runCli("info " + q(dir + "/broken.gltf"), &out), 3) << out;
+    EXPECT_NE(out.find("broken.gltf"), std::string::npos) << out;
 }

@@ -1,0 +1,221 @@
+// glTF 2.0 scene import (core/scene/gltf_scene.h): a scene document built from detail::describeGltfScene.
+#include "core/scene/gltf_scene.h"
+
+#include "core/geometry/mesh_io_detail.h"
+#include "core/util/error.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cctype>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <unistd.h>
+
+namespace fs = std::filesystem;
+
+namespace specula {
+
+namespace {
+
+constexpr double kLumensPerWatt = 683.0;  // glTF's photometric units to Blender's (and Specula's) radiometric ones
+constexpr double kPiD = 3.14159265358979323846;
+
+std::string lowerExtension(const std::string& path) {
+    std::string e = fs::path(path).extension().string();
+    for (char& c : e) c = char(std::tolower(static_cast<unsigned char>(c)));
+    return e;
+}
+
+// glTF is y-up, Specula (like Blender) z-up: Blender's importer turns the scene +90 degrees about x.
+Vec3 zUp(const glm::dvec3& p) { return Vec3(float(p.x), float(-p.z), float(p.y)); }
+nlohmann::json vec(const Vec3& v) { return {v.x, v.y, v.z}; }
+
+// The texture cache's base ($SPECULA_CACHE_DIR, $XDG_CACHE_HOME/specula, ~/.cache/specula, /tmp/specula-cache).
+fs::path imageFolder() {
+    std::vector<fs::path> bases;
+    if (const char* e = std::getenv("SPECULA_CACHE_DIR"); e && *e) bases.emplace_back(e);
+    if (const char* e = std::getenv("XDG_CACHE_HOME"); e && *e) bases.emplace_back(fs::path(e) / "specula");
+    if (const char* e = std::getenv("HOME"); e && *e) bases.emplace_back(fs::path(e) / ".cache" / "specula");
+    bases.emplace_back(fs::temp_directory_path() / "specula-cache");
+    for (const fs::path& b : bases) {
+        std::error_code ec;
+        fs::create_directories(b / "gltf-images", ec);
+        if (!ec && fs::is_directory(b / "gltf-images")) return b / "gltf-images";
+    }
+    throw IoError("no writable cache folder for the glTF file's images (tried $SPECULA_CACHE_DIR, $XDG_CACHE_HOME, ~/.cache, /tmp)");
+}
+
+// Images are named by their content (FNV-1a 64), so the same file imported twice reuses them; written to a temporary
+// and renamed, so a reader never sees half an image.
+std::string saveImage(const std::vector<unsigned char>& bytes, const std::string& ext) {
+    uint64_t h = 1469598103934665603ull;
+    for (unsigned char b : bytes) h = (h ^ b) * 1099511628211ull;
+    char name[40];
+    std::snprintf(name, sizeof name, "%016llx", (unsigned long long)h);
+    const fs::path dir = imageFolder(), file = dir / (std::string(name) + ext);
+    std::error_code ec;
+    if (fs::exists(file, ec) && fs::file_size(file, ec) == bytes.size()) return file.string();
+    static std::atomic<unsigned> serial{0};
+    const fs::path tmp = dir / (std::string(name) + ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(serial++) + ext);
+    {
+        std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+        out.write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
+        if (!out) throw IoError("cannot write the glTF image '" + tmp.string() + "'");
+    }
+    fs::rename(tmp, file, ec);
+    if (ec) throw IoError("cannot write the glTF image '" + file.string() + "': " + ec.message());
+    return file.string();
+}
+
+// A metallic-roughness material as a graph: diffuse base·(1 − metallic) plus GGX with F0 = mix(0.04, base, metallic)
+// and α = roughness², a tangent-space normal map, and emission (glTF 2.0 §B, without the specular/transmission
+// extensions). Texture channels as the spec says: roughness in G, metallic in B, colours sRGB, data raw.
+nlohmann::json materialGraph(const GltfSceneInfo::Material& m) {
+    nlohmann::json nodes = nlohmann::json::object();
+    auto image = [&](const std::string& id, const std::string& file, const char* colorspace) {
+        nodes[id] = {{"type", "texture.image"}, {"inputs", {{"file", file}, {"colorspace", colorspace}}}};
+        return "@" + id + ".color";
+    };
+    const Vec3 baseFactor(m.baseColor);
+    nlohmann::json base = vec(baseFactor), metallic = m.metallic, roughness = m.roughness;
+    if (!m.baseColorTexture.empty()) {
+        nodes["base"] = {{"type", "math.mul.color3"},
+                         {"inputs", {{"a", image("base_image", m.baseColorTexture, "srgb_texture")}, {"b", vec(baseFactor)}}}};
+        base = "@base.out";
+    }
+    if (!m.metallicRoughnessTexture.empty()) {
+        const std::string mr = image("metal_rough_image", m.metallicRoughnessTexture, "raw");
+        nodes["roughness_channel"] = {{"type", "convert.color3_to_float"}, {"inputs", {{"in", mr}, {"channel", "g"}}}};
+        nodes["metallic_channel"] = {{"type", "convert.color3_to_float"}, {"inputs", {{"in", mr}, {"channel", "b"}}}};
+        nodes["roughness"] = {{"type", "math.mul.float"}, {"inputs", {{"a", "@roughness_channel.out"}, {"b", m.roughness}}}};
+        nodes["metallic"] = {{"type", "math.mul.float"}, {"inputs", {{"a", "@metallic_channel.out"}, {"b", m.metallic}}}};
+        roughness = "@roughness.out";
+        metallic = "@metallic.out";
+    }
+    nlohmann::json diffuseColor, f0;
+    if (base.is_array() && metallic.is_number()) {  // all constant: computed here
+        diffuseColor = vec(baseFactor * (1.f - m.metallic));
+        f0 = vec(glm::mix(Vec3(0.04f), baseFactor, m.metallic));
+    } else {
+        nodes["diffuse_color"] = {{"type", "math.mix.color3"}, {"inputs", {{"a", base}, {"b", {0, 0, 0}}, {"t", metallic}}}};
+        nodes["f0"] = {{"type", "math.mix.color3"}, {"inputs", {{"a", {0.04, 0.04, 0.04}}, {"b", base}, {"t", metallic}}}};
+        diffuseColor = "@diffuse_color.out";
+        f0 = "@f0.out";
+    }
+    nodes["diffuse"] = {{"type", "bsdf.diffuse"}, {"inputs", {{"color", diffuseColor}}}};
+    nodes["specular"] = {{"type", "bsdf.ggx"}, {"inputs", {{"roughness", roughness}, {"fresnel", "schlick"}, {"f0", f0}}}};
+    if (!m.normalTexture.empty()) {
+        nodes["normal_map"] = {{"type", "texture.normal_map"},
+                               {"inputs", {{"color", image("normal_image", m.normalTexture, "raw")}, {"strength", m.normalScale}}}};
+        nodes["diffuse"]["inputs"]["normal"] = "@normal_map.normal";
+        nodes["specular"]["inputs"]["normal"] = "@normal_map.normal";
+    }
+    nodes["surface"] = {{"type", "closure.add"}, {"inputs", {{"a", "@diffuse.bsdf"}, {"b", "@specular.bsdf"}}}};
+    std::string output = "@surface.bsdf";
+    if (!m.emissiveTexture.empty() || maxComponent(m.emissive) > 0.f) {
+        nlohmann::json emitted = vec(m.emissive);
+        if (!m.emissiveTexture.empty()) {
+            nodes["emission_color"] = {{"type", "math.mul.color3"},
+                                       {"inputs", {{"a", image("emission_image", m.emissiveTexture, "srgb_texture")}, {"b", vec(m.emissive)}}}};
+            emitted = "@emission_color.out";
+        }
+        nodes["emission"] = {{"type", "bsdf.emission"}, {"inputs", {{"color", emitted}}}};
+        nodes["surface_and_emission"] = {{"type", "closure.add"}, {"inputs", {{"a", "@surface.bsdf"}, {"b", "@emission.bsdf"}}}};
+        output = "@surface_and_emission.bsdf";
+    }
+    return {{"nodes", nodes}, {"output", output}};
+}
+
+}  // namespace
+
+bool isGltfScenePath(const std::string& path) {
+    const std::string e = lowerExtension(path);
+    return e == ".gltf" || e == ".glb";
+}
+
+nlohmann::json gltfSceneDocument(const std::string& path) {
+    std::error_code ec;
+    if (!fs::is_regular_file(path, ec)) throw IoError("cannot open glTF scene '" + path + "'");
+    GltfSceneInfo info;
+    try {
+        info = detail::describeGltfScene(path, lowerExtension(path) == ".glb", &saveImage);
+    } catch (const MeshLoadError& e) {
+        throw IoError(e.what());
+    }
+    if (info.usedMaterials.empty()) throw InputError("", "glTF scene '" + path + "' has no triangles to render");
+    const std::string absolute = fs::absolute(path).lexically_normal().string();
+    nlohmann::json doc;
+    doc["description"] = "imported from the glTF file " + fs::path(path).filename().string();
+
+    // Materials: the glTF name where it is unique, else material_<index>; "default" for primitives without one.
+    nlohmann::json materials = nlohmann::json::object(), shapes = nlohmann::json::array();
+    std::set<std::string> taken;
+    for (int k : info.usedMaterials) {
+        const GltfSceneInfo::Material fallback;
+        const GltfSceneInfo::Material& m = k >= 0 ? info.materials[size_t(k)] : fallback;
+        std::string name = k < 0 ? "default" : m.name;
+        if (name.empty() || taken.count(name)) name = k < 0 ? "default_" + std::to_string(taken.size()) : "material_" + std::to_string(k);
+        taken.insert(name);
+        materials[name] = materialGraph(m);
+        shapes.push_back({{"type", "mesh"}, {"name", fs::path(path).stem().string() + " (" + name + ")"}, {"file", absolute},
+                          {"gltf_material", k}, {"material", name}, {"transform", {{"rotate", {90, 0, 0}}}}});
+    }
+    doc["materials"] = materials;
+    doc["shapes"] = shapes;
+
+    // Camera: the first one of the scene, else one framing the bounds from the front, above and to the right.
+    int width = 960, height = 540;
+    if (!info.cameras.empty()) {
+        const GltfSceneInfo::Camera& c = info.cameras.front();
+        const glm::dmat3 R(c.world);
+        const Vec3 position = zUp(glm::dvec3(c.world[3])), forward = glm::normalize(zUp(R * glm::dvec3(0, 0, -1)));
+        const Vec3 up = glm::normalize(zUp(R * glm::dvec3(0, 1, 0)));
+        if (c.aspect > 0.0) width = std::clamp(int(std::lround(height * c.aspect)), 16, 8192);
+        doc["camera"] = {{"position", vec(position)}, {"look_at", vec(position + forward)}, {"up", vec(up)},
+                         {"fov", std::clamp(c.yfov * 180.0 / kPiD, 0.1, 179.0)}, {"fov_axis", "y"}};
+    } else {
+        Vec3 lo(-1.f), hi(1.f);
+        if (info.hasBounds) {
+            const Vec3 a = zUp(glm::dvec3(info.boundsMin)), b = zUp(glm::dvec3(info.boundsMax));
+            lo = glm::min(a, b), hi = glm::max(a, b);
+        }
+        const Vec3 centre = 0.5f * (lo + hi);
+        const float radius = std::max(0.5f * glm::length(hi - lo), 1e-3f);
+        // The bounding sphere fits the 39.6-degree horizontal field's vertical half-angle (16:9) with a 10% margin.
+        const float halfV = std::atan(std::tan(0.5f * 39.6f * float(kPiD) / 180.f) * 9.f / 16.f);
+        const Vec3 dir = glm::normalize(Vec3(0.45f, -1.f, 0.4f));
+        doc["camera"] = {{"position", vec(centre + dir * (1.1f * radius / std::sin(halfV)))}, {"look_at", vec(centre)}};
+    }
+    doc["render"] = {{"width", width}, {"height", height}, {"spp", 64}, {"integrator", "path"}};
+
+    // KHR_lights_punctual: candela -> W/sr and lux -> W/m² at 683 lm/W (Blender's importer); range is ignored.
+    nlohmann::json lights = nlohmann::json::array();
+    for (const GltfSceneInfo::Light& l : info.lights) {
+        const glm::dmat3 R(l.world);
+        const Vec3 position = zUp(glm::dvec3(l.world[3])), axis = glm::normalize(zUp(R * glm::dvec3(0, 0, -1)));
+        const double value = std::max(0.0, l.intensity) / kLumensPerWatt;
+        nlohmann::json j = {{"name", l.name.empty() ? l.type : l.name}, {"color", vec(glm::max(l.color, Vec3(0.f)))}};
+        if (l.type == "directional") {
+            j["type"] = "directional", j["direction"] = vec(axis), j["irradiance"] = value;
+        } else if (l.type == "spot") {
+            const double outer = std::clamp(l.outerCone, 1e-3, kPiD / 2), inner = std::clamp(l.innerCone, 0.0, outer);
+            j["type"] = "spot", j["position"] = vec(position), j["look_at"] = vec(position + axis);
+            j["cone_angle"] = std::clamp(2.0 * outer * 180.0 / kPiD, 0.01, 180.0);
+            j["blend"] = std::clamp(1.0 - inner / outer, 0.0, 1.0);
+            j["intensity"] = value;
+        } else if (l.type == "point") {
+            j["type"] = "point", j["position"] = vec(position), j["intensity"] = value;
+        } else {
+            continue;  // an unknown type from a newer extension version
+        }
+        lights.push_back(j);
+    }
+    lights.push_back({{"type", "environment"}, {"name", "environment"}, {"color", {1, 1, 1}}, {"strength", 0.5}});
+    doc["lights"] = lights;
+    return doc;
+}
+
+}  // namespace specula
