@@ -141,30 +141,32 @@ struct AccessorView {
     }
 };
 
+// The nodes the default scene instances (all scenes' without a default; without scenes every root node).
+std::vector<int> rootNodes(const tinygltf::Model& m) {
+    std::vector<int> roots;
+    if (!m.scenes.empty()) {
+        if (m.defaultScene >= 0 && size_t(m.defaultScene) < m.scenes.size()) return m.scenes[size_t(m.defaultScene)].nodes;
+        for (const auto& scene : m.scenes) roots.insert(roots.end(), scene.nodes.begin(), scene.nodes.end());
+        return roots;
+    }
+    std::vector<bool> isChild(m.nodes.size(), false);
+    for (const auto& node : m.nodes)
+        for (int c : node.children)
+            if (c >= 0 && size_t(c) < isChild.size()) isChild[size_t(c)] = true;
+    for (size_t i = 0; i < m.nodes.size(); ++i)
+        if (!isChild[i]) roots.push_back(int(i));
+    return roots;
+}
+
 class GltfImporter {
 public:
     GltfImporter(const std::string& path, const tinygltf::Model& model, int materialFilter)
         : path_(path), m_(model), materialFilter_(materialFilter) {}
 
     TriangleMesh run() {
-        std::vector<int> roots;
-        if (!m_.scenes.empty()) {
-            if (m_.defaultScene >= 0 && size_t(m_.defaultScene) < m_.scenes.size()) {
-                roots = m_.scenes[size_t(m_.defaultScene)].nodes;
-            } else {
-                for (const auto& scene : m_.scenes) roots.insert(roots.end(), scene.nodes.begin(), scene.nodes.end());
-            }
-        } else {
-            // No scene: every node that is nobody's child is a root.
-            std::vector<bool> isChild(m_.nodes.size(), false);
-            for (const auto& node : m_.nodes)
-                for (int c : node.children)
-                    if (c >= 0 && size_t(c) < isChild.size()) isChild[size_t(c)] = true;
-            for (size_t i = 0; i < m_.nodes.size(); ++i)
-                if (!isChild[i]) roots.push_back(int(i));
-            if (m_.nodes.empty())  // bare meshes, no node tree at all: take them untransformed
-                for (size_t i = 0; i < m_.meshes.size(); ++i) addMesh(int(i), glm::dmat4(1.0));
-        }
+        const std::vector<int> roots = rootNodes(m_);
+        if (m_.nodes.empty())  // bare meshes, no node tree at all: take them untransformed
+            for (size_t i = 0; i < m_.meshes.size(); ++i) addMesh(int(i), glm::dmat4(1.0));
         for (int r : roots) visit(r, glm::dmat4(1.0), 0);
         if (parts_.empty())
             throwMeshError(path_, materialFilter_ != kAllGltfMaterials
@@ -389,22 +391,6 @@ TriangleMesh loadGltfMesh(const std::string& path, bool binary, int materialFilt
 }
 
 namespace {
-// The nodes the default scene instances (all scenes' without a default; without scenes every root node).
-std::vector<int> rootNodes(const tinygltf::Model& m) {
-    std::vector<int> roots;
-    if (!m.scenes.empty()) {
-        if (m.defaultScene >= 0 && size_t(m.defaultScene) < m.scenes.size()) return m.scenes[size_t(m.defaultScene)].nodes;
-        for (const auto& scene : m.scenes) roots.insert(roots.end(), scene.nodes.begin(), scene.nodes.end());
-        return roots;
-    }
-    std::vector<bool> isChild(m.nodes.size(), false);
-    for (const auto& node : m.nodes)
-        for (int c : node.children)
-            if (c >= 0 && size_t(c) < isChild.size()) isChild[size_t(c)] = true;
-    for (size_t i = 0; i < m.nodes.size(); ++i)
-        if (!isChild[i]) roots.push_back(int(i));
-    return roots;
-}
 
 Vec3 factor3(const std::vector<double>& v, Vec3 def) {
     return v.size() >= 3 ? Vec3(float(v[0]), float(v[1]), float(v[2])) : def;
@@ -478,6 +464,15 @@ GltfSceneInfo describeGltfScene(const std::string& path, bool binary,
     bool any = false;
     std::vector<std::pair<int, glm::dmat4>> stack;
     for (int r : rootNodes(m)) stack.emplace_back(r, glm::dmat4(1.0));
+    // Bare meshes without any node are taken untransformed, as the mesh loader does: a node of each, for the walk.
+    if (m.nodes.empty() && !m.meshes.empty()) {
+        for (size_t i = 0; i < m.meshes.size(); ++i) {
+            tinygltf::Node n;
+            n.mesh = int(i);
+            m.nodes.push_back(n);
+            stack.emplace_back(int(i), glm::dmat4(1.0));
+        }
+    }
     size_t visits = 0;
     while (!stack.empty()) {
         auto [index, parent] = stack.back();
