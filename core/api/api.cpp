@@ -67,6 +67,13 @@ SceneOverrides overridesOf(const LoadOptions& o) {
     ov.width = o.width;
     ov.height = o.height;
     if (o.cropX0 || o.cropY0 || o.cropX1 || o.cropY1) ov.crop = CropWindow{o.cropX0, o.cropY0, o.cropX1, o.cropY1};
+    SceneLimits& l = ov.limits;  // starts at the built-in maxima; a positive option can only lower one
+    if (o.maxPixels > 0) l.maxPixels = std::min(l.maxPixels, o.maxPixels);
+    if (o.maxTriangles > 0) l.maxTriangles = std::min(l.maxTriangles, o.maxTriangles);
+    if (o.maxSpp > 0) l.maxSpp = std::min(l.maxSpp, o.maxSpp);
+    if (o.maxTextureSide > 0) l.maxTextureSide = std::min(l.maxTextureSide, o.maxTextureSide);
+    if (o.maxGraphNodes > 0) l.maxGraphNodes = std::min(l.maxGraphNodes, o.maxGraphNodes);
+    if (o.maxJsonDepth > 0) l.maxJsonDepth = std::min(l.maxJsonDepth, o.maxJsonDepth);
     return ov;
 }
 

@@ -79,12 +79,14 @@ bool drawText(float* rgb, int width, int height, int x, int y, const std::string
 // ---- core/texture/texture_store.h: the module's TextureStore is created on the first load() ----------
 struct TextureStore::Impl {
     std::shared_ptr<const ColorConfig> color;
+    int maxSide = 65536;
     TextureStore* real = nullptr;
     std::mutex m;
 };
 
-TextureStore::TextureStore(std::shared_ptr<const ColorConfig> color) : impl_(std::make_unique<Impl>()) {
+TextureStore::TextureStore(std::shared_ptr<const ColorConfig> color, int maxSide) : impl_(std::make_unique<Impl>()) {
     impl_->color = std::move(color);
+    impl_->maxSide = maxSide;
 }
 TextureStore::~TextureStore() {
     if (impl_ && impl_->real) table().textureDestroy(impl_->real);
@@ -92,7 +94,7 @@ TextureStore::~TextureStore() {
 TextureHandle TextureStore::load(const std::string& path, const std::string& colorspace) {
     {
         std::lock_guard<std::mutex> lock(impl_->m);
-        if (!impl_->real) impl_->real = table().textureCreate(impl_->color);
+        if (!impl_->real) impl_->real = table().textureCreate(impl_->color, impl_->maxSide);
     }
     return table().textureLoad(impl_->real, path, colorspace);
 }

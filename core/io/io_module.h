@@ -31,7 +31,7 @@ struct Table {
     void (*writeImage8)(const std::string&, int, int, int, const float*, const std::string&);
     bool (*drawText)(float*, int, int, int, int, const std::string&, int, const Vec3&, int, bool);
     // core/texture/texture_store.h (on the module's own TextureStore objects)
-    TextureStore* (*textureCreate)(std::shared_ptr<const ColorConfig>);
+    TextureStore* (*textureCreate)(std::shared_ptr<const ColorConfig>, int maxSide);
     void (*textureDestroy)(TextureStore*);
     TextureHandle (*textureLoad)(TextureStore*, const std::string&, const std::string&);
     int (*textureWidth)(const TextureStore*, TextureHandle);

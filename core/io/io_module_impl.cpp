@@ -87,7 +87,7 @@ extern "C" __attribute__((visibility("default"))) const io_module::Table* specul
         x.commitTempFile = &commitTempFile;
         x.writeImage8 = &writeImage8;
         x.drawText = &drawText;
-        x.textureCreate = [](std::shared_ptr<const ColorConfig> c) { return new TextureStore(std::move(c)); };
+        x.textureCreate = [](std::shared_ptr<const ColorConfig> c, int maxSide) { return new TextureStore(std::move(c), maxSide); };
         x.textureDestroy = [](TextureStore* s) { delete s; };
         x.textureLoad = [](TextureStore* s, const std::string& p, const std::string& cs) { return s->load(p, cs); };
         x.textureWidth = [](const TextureStore* s, TextureHandle h) { return s->width(h); };

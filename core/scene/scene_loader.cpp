@@ -13,6 +13,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include <filesystem>
+#include <functional>
 #include <fstream>
 #include <map>
 #include <set>
@@ -37,6 +38,8 @@ struct Context {
     std::string baseDir;
     Scene* scene = nullptr;
     std::map<std::string, int> materials;
+    SceneLimits limits;
+    int64_t triangles = 0;  // of the shapes read so far (limits.maxTriangles)
 };
 
 std::string resolvePath(const Context& ctx, const std::string& p) {
@@ -185,6 +188,10 @@ void readMaterials(const Json& j, Context& ctx) {
     if (!j.is_object()) throw InputError("/materials", "expected an object mapping names to materials, got " + jsonTypeName(j));
     for (auto it = j.begin(); it != j.end(); ++it) {
         std::string ptr = "/materials/" + pointerEscape(it.key());
+        if (it.value().is_object() && it.value().contains("nodes") && it.value()["nodes"].is_object() &&
+            int64_t(it.value()["nodes"].size()) > ctx.limits.maxGraphNodes)
+            throw InputError(ptr + "/nodes", "material '" + it.key() + "' has " + std::to_string(it.value()["nodes"].size()) +
+                                                 " nodes; the limit is " + std::to_string(ctx.limits.maxGraphNodes));
         // Every material is a node graph (docs/graph-format.md), compiled once here.
         GraphLoadContext load{ctx.scene->textures.get(), ctx.baseDir, &ctx.scene->warnings};
         // The raster integrator computes what the GPU does, so nodes the GPU runs as a substitute load it here too.
@@ -250,6 +257,10 @@ void readShape(const Json& j, const std::string& ptr, Context& ctx) {
         sh.meshFile = r.string("file", "");
     }
     sh.mesh = std::move(b.mesh);
+    ctx.triangles += int64_t(sh.mesh.triangleCount());
+    if (ctx.triangles > ctx.limits.maxTriangles)
+        throw InputError(type == "mesh" ? ptr + "/file" : ptr, "the shapes up to this one have " + std::to_string(ctx.triangles) +
+                                                              " triangles; the limit is " + std::to_string(ctx.limits.maxTriangles));
     // The rasteriser shades the tessellation's interpolated attributes, so the raster integrator does too: built-in
     // shapes lose their exact-surface projection there (docs/preview.md).
     if (ctx.scene->render.integrator != IntegratorKind::Raster) sh.surface = b.surface;
@@ -365,11 +376,11 @@ constexpr int kMaxJsonDepth = 64;
 // The JSON pointer of the value being parsed, and the keys seen per object, for the parser callback below.
 class JsonStructureCheck {
 public:
-    explicit JsonStructureCheck(const std::string& name) : name_(name) {}
+    JsonStructureCheck(const std::string& name, int maxDepth) : name_(name), maxDepth_(std::min(maxDepth, kMaxJsonDepth)) {}
     bool operator()(int depth, Json::parse_event_t event, Json& parsed) {
         using E = Json::parse_event_t;
-        if (depth > kMaxJsonDepth)
-            throw InputError(pointer(), name_ + ": JSON nested deeper than " + std::to_string(kMaxJsonDepth) + " levels");
+        if (depth > maxDepth_)
+            throw InputError(pointer(), name_ + ": JSON nested deeper than " + std::to_string(maxDepth_) + " levels");
         switch (event) {
             case E::object_start:
             case E::array_start:
@@ -421,12 +432,13 @@ private:
         return p;
     }
     std::string name_;
+    int maxDepth_;
     std::vector<Frame> frames_;
 };
 
-Json parseJson(const std::string& text, const std::string& name) {
+Json parseJson(const std::string& text, const std::string& name, int maxDepth) {
     try {
-        JsonStructureCheck check(name);
+        JsonStructureCheck check(name, maxDepth);
         return Json::parse(text, [&check](int depth, Json::parse_event_t event, Json& parsed) {
             return check(depth, event, parsed);
         });
@@ -499,7 +511,8 @@ void warnAboutMissingUvs(Scene& scene) {
 
 Scene loadSceneFromString(const std::string& text, const std::string& baseDir, const SceneOverrides& ov,
                           const std::string& name) {
-    Json root = parseJson(text, name);
+    const SceneLimits& limits = ov.limits;
+    Json root = parseJson(text, name, limits.maxJsonDepth);
     JsonReader top(root, "", {"version", "render", "color", "camera", "materials", "shapes", "lights", "$schema", "description"});
     if (top.has("version")) {
         int v = top.integer("version", 1, 0, 1000000);
@@ -510,6 +523,7 @@ Scene loadSceneFromString(const std::string& text, const std::string& baseDir, c
     Context ctx;
     ctx.baseDir = baseDir;
     ctx.scene = &scene;
+    ctx.limits = limits;
     if (top.has("render")) readRender(root.at("render"), scene);
     if (ov.spp > 0) scene.render.spp = ov.spp;
     if (ov.areaLights) scene.render.areaLights = *ov.areaLights;
@@ -517,8 +531,12 @@ Scene loadSceneFromString(const std::string& text, const std::string& baseDir, c
     if (ov.width > 0) scene.render.width = ov.width;
     if (ov.height > 0) scene.render.height = ov.height;
     if (ov.seed >= 0) scene.render.seed = uint64_t(ov.seed);
-    if (int64_t(scene.render.width) * scene.render.height > kMaxPixels)
-        throw InputError("/render/width", "image exceeds the limit of " + std::to_string(kMaxPixels) + " pixels");
+    if (int64_t(scene.render.width) * scene.render.height > std::min(limits.maxPixels, kMaxPixels))
+        throw InputError("/render/width", "a " + std::to_string(scene.render.width) + "x" + std::to_string(scene.render.height) +
+                                              " image exceeds the limit of " + std::to_string(std::min(limits.maxPixels, kMaxPixels)) + " pixels");
+    if (scene.render.spp > limits.maxSpp)
+        throw InputError("/render/spp", std::to_string(scene.render.spp) + " samples per pixel exceed the limit of " +
+                                            std::to_string(limits.maxSpp));
     if (ov.crop) {
         const CropWindow& c = *ov.crop;
         if (c.x0 < 0 || c.y0 < 0 || c.x1 > scene.render.width || c.y1 > scene.render.height || c.x0 >= c.x1 || c.y0 >= c.y1)
@@ -544,7 +562,7 @@ Scene loadSceneFromString(const std::string& text, const std::string& baseDir, c
     if (!scene.color.view.empty() && !scene.colorConfig->hasView(scene.color.view))
         throw InputError("/color/view", "unknown view '" + scene.color.view + "'",
                          nearestName(scene.color.view, scene.colorConfig->views()));
-    scene.textures = std::make_shared<TextureStore>(scene.colorConfig);
+    scene.textures = std::make_shared<TextureStore>(scene.colorConfig, limits.maxTextureSide);
 
     top.require("camera");
     readCamera(root.at("camera"), scene);
@@ -596,6 +614,45 @@ Scene loadScene(const std::string& path, const SceneOverrides& overrides) {
     std::string base = fs::path(path).parent_path().string();
     if (base.empty()) base = ".";
     return loadSceneFromString(text, base, overrides, path);
+}
+
+void setSceneLimit(SceneLimits& limits, const std::string& assignment) {
+    const SceneLimits builtin;
+    const size_t eq = assignment.find('=');
+    const std::string name = assignment.substr(0, eq), value = eq == std::string::npos ? "" : assignment.substr(eq + 1);
+    struct Entry {
+        const char* name;
+        int64_t max;
+        std::function<void(int64_t)> set;
+    };
+    const Entry entries[] = {
+        {"pixels", builtin.maxPixels, [&](int64_t v) { limits.maxPixels = v; }},
+        {"spp", builtin.maxSpp, [&](int64_t v) { limits.maxSpp = int(v); }},
+        {"triangles", builtin.maxTriangles, [&](int64_t v) { limits.maxTriangles = v; }},
+        {"texture_side", builtin.maxTextureSide, [&](int64_t v) { limits.maxTextureSide = int(v); }},
+        {"graph_nodes", builtin.maxGraphNodes, [&](int64_t v) { limits.maxGraphNodes = int(v); }},
+        {"json_depth", builtin.maxJsonDepth, [&](int64_t v) { limits.maxJsonDepth = int(v); }},
+    };
+    std::vector<std::string> names;
+    for (const Entry& e : entries) {
+        names.push_back(e.name);
+        if (name != e.name) continue;
+        size_t used = 0;
+        int64_t v = 0;
+        try {
+            v = std::stoll(value, &used);
+        } catch (const std::exception&) {
+            used = 0;
+        }
+        if (value.empty() || used != value.size() || v < 1 || v > e.max)
+            throw std::invalid_argument("--limit " + name + " expects a whole number from 1 to " + std::to_string(e.max) +
+                                        ", got '" + value + "'");
+        e.set(v);
+        return;
+    }
+    const std::string near = nearestName(name, names);
+    throw std::invalid_argument("--limit: unknown limit '" + name + "'" + (near.empty() ? "" : " (did you mean '" + near + "'?)") +
+                                "; limits: pixels, spp, triangles, texture_side, graph_nodes, json_depth");
 }
 
 std::string describeScene(const Scene& s) {

@@ -10,6 +10,21 @@
 namespace specula {
 
 // Command-line overrides applied on top of the file's render settings (before validation of sizes).
+// Caps a host puts on what a scene may ask for (docs/reliability.md "Limits"; CLI --limit NAME=VALUE, the API's
+// LoadOptions): each at most the built-in maximum it defaults to. A scene beyond one is bad input at the JSON pointer
+// of what exceeds it, found before the thing is built (a texture's header, a mesh's triangle count).
+struct SceneLimits {
+    int64_t maxPixels = int64_t(1) << 26;      // width x height (64 Mpixel)
+    int maxSpp = 1 << 20;                      // samples per pixel
+    int64_t maxTriangles = int64_t(1) << 31;   // all shapes together
+    int maxTextureSide = 65536;                // pixels, either side of any texture
+    int maxGraphNodes = 1 << 16;               // nodes of one material graph
+    int maxJsonDepth = 64;                     // nesting of the scene document
+};
+// The built-in maxima, and `name=value` for the CLI (names: pixels, spp, triangles, texture_side, graph_nodes,
+// json_depth). Throws std::invalid_argument for an unknown name, a non-number, or a value outside 1 .. the maximum.
+void setSceneLimit(SceneLimits& limits, const std::string& assignment);
+
 struct SceneOverrides {
     int spp = 0;               // 0 = keep
     int width = 0, height = 0; // 0 = keep
@@ -17,6 +32,7 @@ struct SceneOverrides {
     std::optional<CropWindow> crop;
     std::optional<AreaLightMode> areaLights;  // render.area_lights
     std::optional<IntegratorKind> integrator; // render.integrator
+    SceneLimits limits;
 };
 
 // Parses and builds a scene from a file. Relative paths in the scene resolve against its folder.

@@ -87,6 +87,7 @@ constexpr int kMaxChunks = 1024;  // up to 262144 textures per store
 struct TextureStore::Impl {
     std::shared_ptr<const ColorConfig> color;
     OIIO::TextureSystem* ts = nullptr;
+    int maxSide = 65536;
 
     std::mutex mutex;                                       // guards everything below except the lock-free table
     std::map<std::pair<std::string, std::string>, int> byKey;  // (absolute path, declared colorspace) -> index
@@ -140,9 +141,10 @@ OIIO::TextureSystem* processTextureSystem() {
 }
 }  // namespace
 
-TextureStore::TextureStore(std::shared_ptr<const ColorConfig> color) : impl_(std::make_unique<Impl>()) {
+TextureStore::TextureStore(std::shared_ptr<const ColorConfig> color, int maxSide) : impl_(std::make_unique<Impl>()) {
     if (!color) throw TextureError("TextureStore needs a ColorConfig");
     impl_->color = std::move(color);
+    impl_->maxSide = std::clamp(maxSide, 1, 65536);
     impl_->ts = processTextureSystem();
 }
 
@@ -152,7 +154,6 @@ namespace {
 
 // A texture is read as floats, converted and MIP-mapped: kMaxTextureTexels per side and kMaxTextureBytes of float
 // pixels bound what a header can make us allocate (docs/scene-format.md, issue 16).
-constexpr int kMaxTextureSide = 65536;
 constexpr uint64_t kMaxTextureBytes = uint64_t(4) << 30;
 constexpr uint64_t kMaxTextureFileBytes = uint64_t(4) << 30;
 
@@ -164,14 +165,14 @@ void checkTextureFileSize(const std::string& path) {
                            formatBytes(kMaxTextureFileBytes));
 }
 
-void checkTextureDimensions(const std::string& path, const OIIO::ImageSpec& spec) {
+void checkTextureDimensions(const std::string& path, const OIIO::ImageSpec& spec, int maxSide) {
     const uint64_t w = uint64_t(std::max(spec.width, 0)), h = uint64_t(std::max(spec.height, 0));
     const uint64_t c = uint64_t(std::max(spec.nchannels, 0)), d = uint64_t(std::max(spec.depth, 1));
     const uint64_t bytes = w * h * d * c * sizeof(float);  // each factor < 2^31: no overflow for depth 1
     const std::string claim = std::to_string(w) + "x" + std::to_string(h) + " pixels, " + std::to_string(c) + " channels";
-    if (w > uint64_t(kMaxTextureSide) || h > uint64_t(kMaxTextureSide) || c > 64 || d > 1 || bytes > kMaxTextureBytes)
+    if (w > uint64_t(maxSide) || h > uint64_t(maxSide) || c > 64 || d > 1 || bytes > kMaxTextureBytes)
         throw TextureInputError("texture '" + path + "': its header claims " + claim + " (" + formatBytes(bytes) +
-                           " as floats); textures are limited to " + std::to_string(kMaxTextureSide) + " pixels a side, " +
+                           " as floats); textures are limited to " + std::to_string(maxSide) + " pixels a side, " +
                            "64 channels and " + formatBytes(kMaxTextureBytes) + " of float pixels");
     // Read, colour conversion and MIP chain hold about three float copies at once.
     const MemoryBudget budget = memoryBudget();
@@ -240,7 +241,7 @@ TextureHandle TextureStore::load(const std::string& path, const std::string& col
         src.reset(path, 0, 0, nullptr, &readConfig);
         if (!src.init_spec(path, 0, 0))
             throw TextureError("cannot read texture '" + path + "': " + src.geterror());
-        checkTextureDimensions(path, src.spec());  // before the pixels: a 300 KB file may claim 100000x100000
+        checkTextureDimensions(path, src.spec(), I.maxSide);  // before the pixels: a 300 KB file may claim 100000x100000
         if (!src.read(0, 0, true, OIIO::TypeDesc::FLOAT))
             throw TextureError("cannot read texture '" + path + "': " + src.geterror());
     }

@@ -36,7 +36,8 @@ struct TextureHandle {
 
 class TextureStore {
 public:
-    explicit TextureStore(std::shared_ptr<const ColorConfig> color);
+    // maxSide: the largest texture side accepted (a host's cap, SceneLimits::maxTextureSide), at most 65536.
+    explicit TextureStore(std::shared_ptr<const ColorConfig> color, int maxSide = 65536);
     ~TextureStore();
     TextureStore(const TextureStore&) = delete;
     TextureStore& operator=(const TextureStore&) = delete;

@@ -104,12 +104,23 @@ int main(int argc, char** argv) {
         ->check(CLI::IsMember({"path", "direct", "raster"}));
     render->add_option("--progress", progress, "Progress output: bar (stderr), json (stdout lines) or none")
         ->check(CLI::IsMember({"bar", "json", "none"}));
+    std::vector<std::string> renderLimits;
+    render->add_option("--limit", renderLimits,
+                       "Cap what the scene may ask for, NAME=VALUE (pixels, spp, triangles, texture_side, graph_nodes, "
+                       "json_depth); repeatable; beyond a cap is bad input (exit 1)");
     CameraShiftOptions shiftOpts;
     addCameraShiftOptions(*render, shiftOpts);
     render->callback([&] {
         SceneOverrides ov;
         ov.spp = spp;
         ov.seed = seed;
+        try {
+            for (const std::string& l : renderLimits) setSceneLimit(ov.limits, l);
+        } catch (const std::invalid_argument& e) {
+            std::fprintf(stderr, "specula: error: %s\n", e.what());
+            exitCode = kExitUsage;
+            return;
+        }
         if (!areaLights.empty()) ov.areaLights = areaLights == "ltc" ? AreaLightMode::Ltc : AreaLightMode::Sampled;
         if (!integratorName.empty())
             ov.integrator = integratorName == "path"     ? IntegratorKind::Path
@@ -257,9 +268,19 @@ int main(int argc, char** argv) {
     auto* info = app.add_subcommand("info", "Validate a scene and print a summary");
     std::string infoScene;
     info->add_option("scene", infoScene, "Scene file")->required();
+    std::vector<std::string> infoLimits;
+    info->add_option("--limit", infoLimits, "Cap what the scene may ask for, NAME=VALUE, as render --limit");
     info->callback([&] {
+        SceneOverrides infoOv;
         try {
-            Scene s = loadScene(infoScene);
+            for (const std::string& l : infoLimits) setSceneLimit(infoOv.limits, l);
+        } catch (const std::invalid_argument& e) {
+            std::fprintf(stderr, "specula: error: %s\n", e.what());
+            exitCode = kExitUsage;
+            return;
+        }
+        try {
+            Scene s = loadScene(infoScene, infoOv);
             for (const std::string& w : s.warnings) std::fprintf(stderr, "specula: warning: %s\n", w.c_str());
             std::printf("%s", describeScene(s).c_str());
         } catch (const std::exception& e) {

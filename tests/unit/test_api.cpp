@@ -108,6 +108,46 @@ TEST(Api, SetLiteralRecompilesOneMaterialAndMatchesAFreshLoad) {
     EXPECT_EQ(beauty(s.render()), before);
 }
 
+// LoadOptions::max* (issue 16 item 2): a host's caps refuse the scene at the pointer of what exceeds them; a cap can
+// only lower the built-in maximum, and the same scene loads under caps it fits.
+TEST(Api, LoadOptionLimitsRefuseScenesBeyondThem) {
+    auto refusedAt = [](const sp::LoadOptions& lo) {
+        try {
+            sp::Scene::fromString(kScene, "", lo);
+        } catch (const Error& e) {
+            EXPECT_EQ(e.code(), ErrorCode::BadInput) << e.what();
+            return e.pointer();
+        }
+        return std::string("(loaded)");
+    };
+    sp::LoadOptions lo;
+    lo.maxSpp = 1;
+    EXPECT_EQ(refusedAt(lo), "/render/spp");
+    lo = {};
+    lo.maxPixels = 100;
+    EXPECT_EQ(refusedAt(lo), "/render/width");
+    lo = {};
+    lo.maxTriangles = 100;
+    EXPECT_EQ(refusedAt(lo).rfind("/shapes/", 0), 0u);
+    lo = {};
+    lo.maxGraphNodes = 1;  // every material of kScene has one node: it fits
+    EXPECT_EQ(refusedAt(lo), "(loaded)");
+    std::string twoNodes = kScene;
+    twoNodes.replace(twoNodes.find("{\"spec\":"), 9, "{\"extra\": {\"type\": \"bsdf.diffuse\"}, \"spec\":");
+    try {
+        sp::Scene::fromString(twoNodes, "", lo);
+        ADD_FAILURE() << "a two-node material passed a one-node cap";
+    } catch (const Error& e) {
+        EXPECT_EQ(e.pointer(), "/materials/gold/nodes") << e.what();
+    }
+    lo = {};
+    lo.maxJsonDepth = 2;
+    EXPECT_NE(refusedAt(lo), "(loaded)");
+    lo = {};
+    lo.maxSpp = 2, lo.maxPixels = int64_t(1) << 40, lo.maxJsonDepth = 1000;  // above the built-in: the built-in holds
+    EXPECT_EQ(refusedAt(lo), "(loaded)");
+}
+
 // setValue: any pointer; a literal goes through setLiteral, anything else re-loads the edited document with the
 // original LoadOptions; failures name the pointer and leave the scene unchanged.
 TEST(Api, SetValueEditsAnyPointerAndMatchesAFreshLoad) {
