@@ -2,6 +2,7 @@
 #include "core/scene/gltf_scene.h"
 
 #include "core/geometry/mesh_io_detail.h"
+#include "core/util/cache_dir.h"
 #include "core/util/error.h"
 
 #include <algorithm>
@@ -33,21 +34,6 @@ std::string lowerExtension(const std::string& path) {
 Vec3 zUp(const glm::dvec3& p) { return Vec3(float(p.x), float(-p.z), float(p.y)); }
 nlohmann::json vec(const Vec3& v) { return {v.x, v.y, v.z}; }
 
-// The texture cache's base ($SPECULA_CACHE_DIR, $XDG_CACHE_HOME/specula, ~/.cache/specula, /tmp/specula-cache).
-fs::path imageFolder() {
-    std::vector<fs::path> bases;
-    if (const char* e = std::getenv("SPECULA_CACHE_DIR"); e && *e) bases.emplace_back(e);
-    if (const char* e = std::getenv("XDG_CACHE_HOME"); e && *e) bases.emplace_back(fs::path(e) / "specula");
-    if (const char* e = std::getenv("HOME"); e && *e) bases.emplace_back(fs::path(e) / ".cache" / "specula");
-    bases.emplace_back(fs::temp_directory_path() / "specula-cache");
-    for (const fs::path& b : bases) {
-        std::error_code ec;
-        fs::create_directories(b / "gltf-images", ec);
-        if (!ec && fs::is_directory(b / "gltf-images")) return b / "gltf-images";
-    }
-    throw IoError("no writable cache folder for the glTF file's images (tried $SPECULA_CACHE_DIR, $XDG_CACHE_HOME, ~/.cache, /tmp)");
-}
-
 // Images are named by their content (FNV-1a 64), so the same file imported twice reuses them; written to a temporary
 // and renamed, so a reader never sees half an image.
 std::string saveImage(const std::vector<unsigned char>& bytes, const std::string& ext) {
@@ -55,7 +41,7 @@ std::string saveImage(const std::vector<unsigned char>& bytes, const std::string
     for (unsigned char b : bytes) h = (h ^ b) * 1099511628211ull;
     char name[40];
     std::snprintf(name, sizeof name, "%016llx", (unsigned long long)h);
-    const fs::path dir = imageFolder(), file = dir / (std::string(name) + ext);
+    const fs::path dir = cacheFolder("gltf-images"), file = dir / (std::string(name) + ext);
     std::error_code ec;
     if (fs::exists(file, ec) && fs::file_size(file, ec) == bytes.size()) return file.string();
     static std::atomic<unsigned> serial{0};

@@ -1,6 +1,8 @@
 // TextureStore: reads images with OpenImageIO, converts them once to the linear working space, caches a
 // MIP-mapped float .tx per (content, colorspace) and samples it through a shared OIIO TextureSystem.
 #include "core/texture/texture_store.h"
+#include "core/util/cache_dir.h"
+#include "core/util/error.h"
 #include "core/util/memory_budget.h"
 
 #include "core/color/color_config.h"
@@ -38,25 +40,13 @@ std::string hex64(uint64_t v) {
     return buf;
 }
 
-bool usableDir(const fs::path& d) {
-    std::error_code ec;
-    fs::create_directories(d, ec);
-    return fs::is_directory(d, ec) && ::access(d.c_str(), W_OK | X_OK) == 0;
-}
-
-// $SPECULA_CACHE_DIR, $XDG_CACHE_HOME/specula, ~/.cache/specula, then /tmp; "textures" below it.
+// The shared cache rule (core/util/cache_dir.h), "textures" below it.
 std::string textureCacheDir() {
-    std::vector<fs::path> bases;
-    if (const char* e = std::getenv("SPECULA_CACHE_DIR"); e && *e) bases.emplace_back(e);
-    if (const char* e = std::getenv("XDG_CACHE_HOME"); e && *e) bases.emplace_back(fs::path(e) / "specula");
-    if (const char* e = std::getenv("HOME"); e && *e) bases.emplace_back(fs::path(e) / ".cache" / "specula");
-    bases.emplace_back(fs::temp_directory_path() / ("specula-cache-" + std::to_string(::getuid())));
-    for (const auto& b : bases) {
-        fs::path d = b / "textures";
-        if (usableDir(d)) return d.string();
+    try {
+        return cacheFolder("textures");
+    } catch (const IoError& e) {
+        throw TextureError(e.what());
     }
-    throw TextureError("no writable texture cache directory (tried $SPECULA_CACHE_DIR, $XDG_CACHE_HOME/specula, "
-                       "~/.cache/specula and the temp dir)");
 }
 
 OIIO::TextureOpt::Wrap toOiio(TextureWrap w) {

@@ -66,6 +66,18 @@ bool parsePair(const std::string& s, char sep, int& a, int& b) {
 // A string as a JSON literal (quotes and escapes), for the machine-readable output lines.
 std::string jsonString(const std::string& s) { return nlohmann::json(s).dump(); }
 
+// The --limit NAME=VALUE options of render and info into SceneLimits; a bad one is a usage error (exit 2).
+bool readLimitOptions(const std::vector<std::string>& options, SceneLimits& limits, int& exitCode) {
+    try {
+        for (const std::string& l : options) setSceneLimit(limits, l);
+        return true;
+    } catch (const std::invalid_argument& e) {
+        std::fprintf(stderr, "specula: error: %s\n", e.what());
+        exitCode = kExitUsage;
+        return false;
+    }
+}
+
 int reportError(const std::exception& e, int code) {
     std::fprintf(stderr, "specula: error: %s\n", e.what());
     return code;
@@ -114,13 +126,7 @@ int main(int argc, char** argv) {
         SceneOverrides ov;
         ov.spp = spp;
         ov.seed = seed;
-        try {
-            for (const std::string& l : renderLimits) setSceneLimit(ov.limits, l);
-        } catch (const std::invalid_argument& e) {
-            std::fprintf(stderr, "specula: error: %s\n", e.what());
-            exitCode = kExitUsage;
-            return;
-        }
+        if (!readLimitOptions(renderLimits, ov.limits, exitCode)) return;
         if (!areaLights.empty()) ov.areaLights = areaLights == "ltc" ? AreaLightMode::Ltc : AreaLightMode::Sampled;
         if (!integratorName.empty())
             ov.integrator = integratorName == "path"     ? IntegratorKind::Path
@@ -272,13 +278,7 @@ int main(int argc, char** argv) {
     info->add_option("--limit", infoLimits, "Cap what the scene may ask for, NAME=VALUE, as render --limit");
     info->callback([&] {
         SceneOverrides infoOv;
-        try {
-            for (const std::string& l : infoLimits) setSceneLimit(infoOv.limits, l);
-        } catch (const std::invalid_argument& e) {
-            std::fprintf(stderr, "specula: error: %s\n", e.what());
-            exitCode = kExitUsage;
-            return;
-        }
+        if (!readLimitOptions(infoLimits, infoOv.limits, exitCode)) return;
         try {
             Scene s = loadScene(infoScene, infoOv);
             for (const std::string& w : s.warnings) std::fprintf(stderr, "specula: warning: %s\n", w.c_str());
