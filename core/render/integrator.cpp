@@ -102,12 +102,10 @@ Color3 Integrator::meshLightEmission(const LightSample& ls, const Vec3& p, Scrat
     h.b1 = ls.bary.x;
     h.b2 = ls.bary.y;
     h.t = ls.distance;
-    Ray r;
+    RayDifferential r;  // no differentials: emission is looked up at the point
     r.o = p;
     r.d = ls.wi;
-    RayDifferential rd;
-    static_cast<Ray&>(rd) = r;
-    const ShadingPoint lp = accel_.shadingPoint(rd, h);
+    const ShadingPoint lp = accel_.shadingPoint(r, h);
     Closure unused;
     Color3 Le(0.f);
     scene_.materials[size_t(scene_.shapes[size_t(ls.shape)].material)]->shade(lp, arena, unused, &Le);
