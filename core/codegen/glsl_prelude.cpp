@@ -27,6 +27,8 @@ struct SpeculaShadingInputs {
     vec2 duvdx, duvdy;      // of uv
     vec3 dNdx, dNdy;        // of N
     vec3 dwodx, dwody;      // of the view direction wo (0: orthographic camera)
+    bool front_facing;      // the viewer is on the side the surface's normal points to (gl_FrontFacing); false
+                            // inside a closed object: refracting nodes (bsdf.dielectric) invert their IOR there
 };
 
 // What a closure is asked (CPU: BsdfQuery), the first parameter of every BSDF function. kind DIRECTION: f·cos for the
@@ -130,6 +132,7 @@ SpeculaShadingInputs specula_shading_inputs(vec3 P, vec3 N, vec3 Ng, vec4 T, vec
     s.dNdy = dFdyFine(s.normal);
     s.dwodx = vec3(0.0);
     s.dwody = vec3(0.0);
+    s.front_facing = gl_FrontFacing;
     return s;
 }
 // The same with the view direction wo (unit, towards the viewer), whose screen derivatives filtered lobes use.

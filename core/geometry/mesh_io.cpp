@@ -11,6 +11,7 @@
 #include <array>
 #include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -389,9 +390,12 @@ TriangleMesh loadPly(const std::string& path) {
                 double c = body.read(p.countType);
                 if (!(c >= 0) || c != std::floor(c))
                     throwMeshError(path, "PLY: invalid list length " + std::to_string(c));
-                if (c > double(body.remaining()))  // every item takes at least one byte (or character)
-                    throwMeshError(path, "PLY body ends unexpectedly (list of " + std::to_string(size_t(c)) +
-                                             " items)");
+                if (c > double(body.remaining())) {  // every item takes at least one byte (or character)
+                    // Printed from the double: a count beyond size_t (an ASCII 1e54) must not be cast to it.
+                    char items[64];
+                    std::snprintf(items, sizeof items, "%.0f", c);
+                    throwMeshError(path, std::string("PLY body ends unexpectedly (list of ") + items + " items)");
+                }
                 size_t count = size_t(c);
                 if (int(i) == iface) poly.clear();
                 for (size_t j = 0; j < count; ++j) {

@@ -29,6 +29,7 @@ const char* bindingName(GeomBinding b) {
         case GeomBinding::PixelDUVDY: return "duv0dy_pixel";
         case GeomBinding::PixelDNDX: return "dNdx_pixel";
         case GeomBinding::PixelDNDY: return "dNdy_pixel";
+        case GeomBinding::FrontFacing: return "front_facing";
     }
     return "";
 }
@@ -50,6 +51,7 @@ TypeDesc bindingType(GeomBinding b) {
         case GeomBinding::Ng: return TypeDesc::Normal3;
         case GeomBinding::TSign:
         case GeomBinding::NdotV:
+        case GeomBinding::FrontFacing:
         case GeomBinding::None: return TypeDesc::Float;
     }
     return TypeDesc::Float;
@@ -73,6 +75,7 @@ const char* bindingGlsl(GeomBinding b) {
         case GeomBinding::PixelDUVDY: return "s.duvdy";
         case GeomBinding::PixelDNDX: return "s.dNdx";
         case GeomBinding::PixelDNDY: return "s.dNdy";
+        case GeomBinding::FrontFacing: return "(s.front_facing ? 1.0 : 0.0)";
     }
     return "";
 }
@@ -97,6 +100,7 @@ void loadBinding(GeomBinding b, const ShadingPoint& sp, float* d) {
         case GeomBinding::PixelDUVDY: v2(sp.duvdy / sp.differentialScale.y); break;
         case GeomBinding::PixelDNDX: v3(sp.dndx / sp.differentialScale.x); break;
         case GeomBinding::PixelDNDY: v3(sp.dndy / sp.differentialScale.y); break;
+        case GeomBinding::FrontFacing: d[0] = sp.frontFacing ? 1.f : 0.f; break;
     }
 }
 

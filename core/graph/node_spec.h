@@ -43,6 +43,7 @@ enum class GeomBinding : uint8_t {
     PixelDUVDY,  // vec2    sp.duvdy / scale.y   s.duvdy
     PixelDNDX,   // vector3 sp.dndx / scale.x    s.dNdx
     PixelDNDY,   // vector3 sp.dndy / scale.y    s.dNdy
+    FrontFacing, // float   sp.frontFacing (1/0)  s.front_facing (1/0): the ray arrived on the side the normal points to
 };
 const char* bindingName(GeomBinding b);
 TypeDesc bindingType(GeomBinding b);

@@ -27,11 +27,19 @@ namespace {
 bool sameFrame(const Frame& a, const Frame& b) { return a.n == b.n && a.t == b.t && a.b == b.b; }
 }  // namespace
 
+// The lobes of q.lobes that scatter towards wi (BsdfQuery::ng): the reflecting ones above the geometric surface, the
+// transmitting ones below it; q.lobes itself where no geometric normal is given.
+LobeMask Closure::sidedLobes(const BsdfQuery& q, const Vec3& wi) const {
+    if (q.ng == Vec3(0.f)) return q.lobes;
+    return q.lobes & (glm::dot(wi, q.ng) > 0.f ? ~transmitting_ : transmitting_);
+}
+
 void Closure::add(const Color3& weight, const BsdfLobe* lobe, const Frame& frame) {
     if (!lobe || count_ >= kMaxLobes || maxComponent(weight) <= 0.f) return;
     lobes_[count_] = lobe;
     weights_[count_] = weight;
     frames_[count_] = frame;
+    if (lobe->transmits()) transmitting_ |= LobeMask(1) << count_;
     ++count_;
     sel_.valid = false;
 }
@@ -69,9 +77,10 @@ BsdfValue Closure::evalPdf(const BsdfQuery& q) const {
     const Vec3* wo = s.woLocal;
     const float* w = s.w;
     const float sum = s.sum;
+    const LobeMask lobes = sidedLobes(q, q.wi);
     for (int i = 0; i < count_; ++i) {
         LobeValue v = lobes_[i]->evalPdf(LobeQuery{wo[i], frames_[i].toLocal(q.wi), q.lightDistance});
-        if ((q.lobes >> i) & 1) (lobes_[i]->kind() == LobeKind::Diffuse ? r.f.diffuse : r.f.specular) += weights_[i] * v.f;
+        if ((lobes >> i) & 1) (lobes_[i]->kind() == LobeKind::Diffuse ? r.f.diffuse : r.f.specular) += weights_[i] * v.f;
         if (w[i] > 0.f) r.pdf += w[i] / sum * v.pdf;
     }
     return r;
@@ -100,10 +109,11 @@ bool Closure::sample(const BsdfQuery& q, float uLobe, const Vec2& u, BsdfSample&
     // Lobes sharing the sampling lobe's frame see the sampled local direction itself (no round trip through world).
     BsdfEval f;
     float pdf = 0.f;
+    const LobeMask lobes = sidedLobes(q, out.wi);
     for (int i = 0; i < count_; ++i) {
         Vec3 wi = sameFrame(frames_[i], fc) ? wiChosen : frames_[i].toLocal(out.wi);
         LobeValue v = lobes_[i]->evalPdf(LobeQuery{wo[i], wi, q.lightDistance});
-        if ((q.lobes >> i) & 1) (lobes_[i]->kind() == LobeKind::Diffuse ? f.diffuse : f.specular) += weights_[i] * v.f;
+        if ((lobes >> i) & 1) (lobes_[i]->kind() == LobeKind::Diffuse ? f.diffuse : f.specular) += weights_[i] * v.f;
         if (w[i] > 0.f) pdf += w[i] / sum * v.pdf;
     }
     out.pdf = pdf;
@@ -144,7 +154,7 @@ LobeMask Closure::integrateEnvironment(const BsdfQuery& q, const Vec3* hemispher
         if (!lobes_[i]->environmentLookup(lq, dir, alpha)) continue;
         for (int k = 0; k < count; ++k) local[k] = frames_[i].toLocal(hemisphere[k]);
         Color3 r;
-        if (!lobes_[i]->integratePolygon(lq, local, count, r)) continue;
+        if (!lobes_[i]->environmentIntegral(lq, local, count, r)) continue;
         const Color3 L = radiance(frames_[i].toWorld(dir), alpha);
         (lobes_[i]->kind() == LobeKind::Diffuse ? out.diffuse : out.specular) += weights_[i] * r * L;
         done |= LobeMask(1) << i;

@@ -49,6 +49,10 @@ struct BsdfQuery {
     // Polygon queries (integratePolygon): how LTC lobes treat the horizon; 0 = exact clipping, 1 = clip-free sphere
     // approximation (ltc::Horizon; render.ltc_horizon).
     uint8_t polygonHorizon = 0;
+    // The geometric normal on wo's side, or 0 (tools, tests): when set, each lobe scatters only to its side of the
+    // surface, reflecting lobes to wi above it and transmitting lobes (BsdfLobe::transmits) to wi below it, so that
+    // shading normals leak no light through the surface either way (pbrt-v3's rule). The pdf is unchanged.
+    Vec3 ng{0.f};
 };
 
 // The same query in one lobe's local frame (z = the lobe's normal).
@@ -86,6 +90,8 @@ class BsdfLobe {
 public:
     virtual ~BsdfLobe() = default;
     virtual LobeKind kind() const = 0;
+    // Whether the lobe scatters into the other hemisphere (wi below the surface: refraction) instead of its own.
+    virtual bool transmits() const { return false; }
     // The one evaluation entry: f(wo, wi)·|cos θi| and pdf(wi | wo); zero where the lobe does not scatter.
     virtual LobeValue evalPdf(const LobeQuery& q) const = 0;
     // Draws wi from u in [0,1)^2 for q.wo (q.wi is ignored). Returns false if no direction could be produced.
@@ -108,6 +114,11 @@ public:
     // α < 0 reads the irradiance map). Lobes with integratePolygon and this get the environment as their hemisphere
     // integral times that radiance; false (the default) leaves the lobe to the caller's estimate.
     virtual bool environmentLookup(const LobeQuery& q, Vec3& dir, float& alpha) const { return false; }
+    // The factor of that radiance: the lobe's integral over the hemisphere polygon (integratePolygon) unless the lobe
+    // says otherwise (a transmitting lobe: its transmitted fraction, which no upper-hemisphere polygon holds).
+    virtual bool environmentIntegral(const LobeQuery& q, const Vec3* hemisphere, int count, Color3& result) const {
+        return integratePolygon(q, hemisphere, count, result);
+    }
     // For lobes with integratePolygon: a direction wi distributed in proportion to the integrand integratePolygon
     // integrates, restricted to the polygon (u: the first random pair; seed: for further tries). The shadow ratio
     // of Heitz, Hill & McGuire 2018 then needs one visibility test: E[integral·V(wi)] = the shadowed integral.
@@ -164,6 +175,7 @@ public:
 
     void clear() {
         count_ = 0;
+        transmitting_ = 0;
         sel_.valid = false;
     }
     // Adds weight·lobe whose local frame is 'frame'; lobes beyond kMaxLobes or with zero weight are dropped.
@@ -178,6 +190,8 @@ public:
     const Color3& weight(int i) const { return weights_[i]; }
     const Frame& frame(int i) const { return frames_[i]; }
     LobeMask allLobes() const { return count_ >= 32 ? kAllLobes : (LobeMask(1) << count_) - 1; }
+    // Whether some lobe transmits (BsdfLobe::transmits): paths and light samples then continue below the surface.
+    bool transmits() const { return transmitting_ != 0; }
 
     // f·cos by category and the mixture pdf of sample() over the lobes in q.lobes (the selection
     // probabilities always count every lobe, so the pdf is that of sample() whatever the mask).
@@ -219,10 +233,12 @@ private:
         float sum = 0.f;
     };
     const Selection& selection(const Vec3& wo) const;
+    LobeMask sidedLobes(const BsdfQuery& q, const Vec3& wi) const;
     std::array<const BsdfLobe*, kMaxLobes> lobes_{};
     std::array<Color3, kMaxLobes> weights_{};
     std::array<Frame, kMaxLobes> frames_{};
     int count_ = 0;
+    LobeMask transmitting_ = 0;  // the lobes that transmit
     mutable Selection sel_;
 };
 

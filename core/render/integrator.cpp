@@ -228,6 +228,7 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
         // lobes with a closed-form polygon integral (BsdfLobe::integratePolygon, e.g. LTC lobes) are integrated
         // analytically with stochastic shadows; the other lobes are estimated from a light sample with MIS, and
         // BSDF sampling later counts only those for this light.
+        const bool transmits = closure.transmits();  // paths and light samples may continue below the surface
         std::array<LobeMask, kMaxAnalyticLights> analytic{};
         for (size_t li = 0; li < scene_.lights.size(); ++li) {
             const Light& light = *scene_.lights[li];
@@ -235,6 +236,7 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
             Vec2 u = sampler.get2D();
             BsdfQuery q;
             q.wo = wo;
+            q.ng = sp.ng;
             q.polygonHorizon = scene_.render.ltcHorizon;
             if (ltcLights_ && depth <= ltcMaxDepth_ && li < kMaxAnalyticLights) {
                 Vec3 poly[4];
@@ -302,7 +304,7 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
                     q.lobes = ~analytic[li];
                     if ((q.lobes & closure.allLobes()) == 0) continue;
                     if (!light.sample(sp.pGeom, u, ls) || !(ls.pdf > 0.f) || maxComponent(ls.L) <= 0.f) continue;
-                    if (glm::dot(ls.wi, sp.ng) <= 0.f) continue;
+                    if (glm::dot(ls.wi, sp.ng) <= 0.f && !transmits) continue;
                     q.wi = ls.wi;
                     BsdfValue v = closure.evalPdf(q);
                     if (maxComponent(v.f.total()) <= 0.f) continue;
@@ -312,8 +314,9 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
                 }
             }
             if (!light.sample(sp.pGeom, u, ls) || !(ls.pdf > 0.f)) continue;
-            // Reject directions on the wrong side of the geometric surface (light leaks through normals).
-            if (glm::dot(ls.wi, sp.ng) <= 0.f) continue;
+            // Directions below the geometric surface reach only transmitting lobes (BsdfQuery::ng: no light leaks through
+            // shading normals either way).
+            if (glm::dot(ls.wi, sp.ng) <= 0.f && !transmits) continue;
             if (ls.shape >= 0) ls.L = meshLightEmission(ls, sp.pGeom, arena);
             if (maxComponent(ls.L) <= 0.f) continue;
             q.wi = ls.wi;
@@ -345,9 +348,11 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
         float uRr = sampler.get1D();
         BsdfQuery sq;
         sq.wo = wo;
+        sq.ng = sp.ng;
         if (!closure.sample(sq, uLobe, uDir, bs)) break;
         const Vec3 wiW = bs.wi;
-        if (glm::dot(wiW, sp.ng) <= 0.f) break;  // below the geometric surface
+        if (glm::dot(wiW, sp.ng) <= 0.f && !transmits) break;  // below the geometric surface
+        if (transmits && maxComponent(bs.f.total()) <= 0.f) break;  // e.g. a reflection sampled below the surface
         const Throughput betaPrev = beta;
         if (depth == 0) {
             beta.d = bs.f.diffuse / bs.pdf;
@@ -390,6 +395,7 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
                 // Only the lobes this light's analytic integral left out: their f·cos over the mixture pdf.
                 BsdfQuery rq;
                 rq.wo = wo;
+                rq.ng = sp.ng;
                 rq.wi = wiW;
                 rq.lobes = ~done;
                 BsdfEval fr = closure.evalPdf(rq).f;

@@ -233,6 +233,15 @@ const std::map<std::string, std::string>& nodeNotes() {
          "B.2), αx and αy clamped at 1e-4 like `GgxLobe`; `fresnel` is evaluated per microfacet at wo·h. CPU: "
          "`GgxLobe` (anisotropic GGX D, Walter et al. 2007 Eq. 33; height-correlated Smith G2, Heitz 2014 Eq. 99; VNDF "
          "sampling, Heitz 2018), unfiltered. GLSL: the same eval, f·cos = weight·F·D·G2/(4 wo.z)."},
+        {"bsdf.dielectric",
+         "η = `ior` outside (`front_facing` ≥ 0.5), 1/`ior` inside; α as `bsdf.ggx`. CPU: `GgxLobe` with "
+         "`fresnelDielectric(wo·h, η)` for reflection plus `GgxTransmissionLobe` (core/render/lobes/dielectric.h) for "
+         "refraction: f·cos = (1 − F) D G2 |wi·h| |wo·h| / (|wo.z| (wi·h + wo·h/η')² η'²), η' = n_wi/n_wo, "
+         "h = normalize(wo + η' wi) (Walter et al. 2007, Eqs. 16 and 21, radiance form); refraction sampled through a "
+         "visible normal (Heitz 2018), pdf with the Jacobian of Eq. 17. The closure's lobes scatter only to their side "
+         "of the geometric surface (`BsdfQuery::ng`). GLSL: the same direction eval; polygon queries as `bsdf.ggx` "
+         "with `partial` set for a polygon below the surface; environment queries add (1 − F(wo.z)) times "
+         "`spc_host_environment` along the refracted view direction at α·|1 − 1/η|/2."},
         {"bsdf.emission", "No lobes: emission only."},
         {"closure.add", "Lobes are concatenated, at most `Closure::kMaxLobes` = 8."},
         {"closure.mix", "Lobe weights and emission are scaled."},

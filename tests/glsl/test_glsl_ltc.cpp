@@ -131,6 +131,7 @@ vec2 spc_in2(int i) { return vec2(spc_in(i), spc_in(i + 1)); }
 vec3 spc_in3(int i) { return vec3(spc_in(i), spc_in(i + 1), spc_in(i + 2)); }
 void main() {
     SpeculaShadingInputs s;
+    s.front_facing = true;
     s.position = vec3(0.0); s.normal = spc_in3(0); s.geometric_normal = s.normal; s.tangent = vec4(spc_in3(3), 1.0);
     s.uv = vec2(0.0); s.dPdx = vec3(0.0); s.dPdy = vec3(0.0); s.duvdx = vec2(0.0); s.duvdy = vec2(0.0);
     s.dNdx = vec3(0.0); s.dNdy = vec3(0.0); s.dwodx = spc_in3(21); s.dwody = spc_in3(24);
@@ -444,6 +445,7 @@ float spc_in(int i) { return texelFetch(spc_data_, ivec2(i >> 2, int(gl_FragCoor
 vec3 spc_in3(int i) { return vec3(spc_in(i), spc_in(i + 1), spc_in(i + 2)); }
 void main() {
     SpeculaShadingInputs s;
+    s.front_facing = true;
     s.position = vec3(0.0); s.normal = spc_in3(0); s.geometric_normal = s.normal; s.tangent = vec4(spc_in3(3), 1.0);
     s.uv = vec2(0.0); s.dPdx = vec3(0.0); s.dPdy = vec3(0.0); s.duvdx = vec2(0.0); s.duvdy = vec2(0.0);
     s.dNdx = vec3(0.0); s.dNdy = vec3(0.0); s.dwodx = vec3(0.0); s.dwody = vec3(0.0);

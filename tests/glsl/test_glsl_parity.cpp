@@ -154,6 +154,7 @@ vec2 spc_in2(int i) { return vec2(spc_in(i), spc_in(i + 1)); }
 vec3 spc_in3(int i) { return vec3(spc_in(i), spc_in(i + 1), spc_in(i + 2)); }
 void main() {
     SpeculaShadingInputs s;
+    s.front_facing = true;
     s.position = spc_in3(0); s.normal = spc_in3(3); s.geometric_normal = spc_in3(6);
     s.tangent = vec4(spc_in3(9), spc_in(12)); s.uv = spc_in2(13);
     s.dPdx = spc_in3(15); s.dPdy = spc_in3(18); s.duvdx = spc_in2(21); s.duvdy = spc_in2(23);
@@ -425,6 +426,7 @@ vec4 spc_px(int i) { return texelFetch(spc_data_, ivec2(i, int(gl_FragCoord.y)),
 void main() {
     vec4 a = spc_px(0), b = spc_px(1), c = spc_px(2), d = spc_px(3), e = spc_px(4);
     SpeculaShadingInputs s;
+    s.front_facing = true;
     s.position = a.xyz; s.normal = vec3(a.w, b.xy); s.tangent = vec4(b.zw, c.x, 1.0);
     s.geometric_normal = s.normal; s.uv = c.yz;
     s.dPdx = vec3(0.0); s.dPdy = vec3(0.0); s.duvdx = vec2(0.0); s.duvdy = vec2(0.0); s.dNdx = vec3(0.0); s.dNdy = vec3(0.0);

@@ -1090,6 +1090,9 @@ TEST_F(LoaderTest, ErrorsNameThePathAndReason) {
         "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
     expectLoadError(write("range.ply", plyHead + "0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n"), "out of range");
     expectLoadError(write("short.ply", plyHead + "0 0 0\n1 0 0\n"), "ends unexpectedly");
+    // A list length beyond size_t (found by fuzz_mesh: the message cast it, a float-cast overflow under UBSan).
+    expectLoadError(write("hugelist.ply", plyHead + "0 0 0\n1 0 0\n0 1 0\n1e54 0 1 2\n"),
+                    "ends unexpectedly (list of 1000000000000000");
     expectLoadError(write("nan.ply", plyHead + "0 0 0\n1 zero 0\n0 1 0\n3 0 1 2\n"), "malformed number");
     expectLoadError(write("noface.ply", plyHead.substr(0, plyHead.find("element face")) +
                                             "end_header\n0 0 0\n1 0 0\n0 1 0\n"),

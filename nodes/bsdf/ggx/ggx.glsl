@@ -1,19 +1,6 @@
 // bsdf.ggx: f·cos = weight · F(wo·h) D(h) G2(wo, wi) / (4 wo.z), the GLSL twin of GgxLobe::eval (and of
 // GgxLobe::integratePolygon for polygon queries).
-// D: anisotropic GGX (Walter et al. 2007, Eq. 33); Λ: Heitz 2014, Eq. 86; G2 = 1/(1 + Λo + Λi) (Eq. 99).
-float spc_ggx_ndf(vec3 h, float ax, float ay) {
-    if (h.z <= 0.0) return 0.0;
-    float hx = h.x / ax, hy = h.y / ay;
-    float e = hx * hx + hy * hy + h.z * h.z;
-    return 1.0 / (SPC_PI * ax * ay * e * e);
-}
-float spc_ggx_lambda(vec3 w, float ax, float ay) {
-    float z2 = w.z * w.z;
-    if (z2 <= 0.0) return 1e30;
-    float px = ax * w.x, py = ay * w.y;
-    float a2tan2 = (px * px + py * py) / z2;
-    return 0.5 * (-1.0 + sqrt(1.0 + a2tan2));
-}
+// D and Λ: shared/ggx_microfacet.glsl; G2 = 1/(1 + Λo + Λi) (Heitz 2014, Eq. 99).
 // Polygon queries (GgxLobe::integratePolygon): the fitted LTC of this lobe (isotropic 64×64 table, or the anisotropic
 // table for αx != αy; shared/ltc.glsl) times F0·mag + (1 − F0)·fres.
 void spc_bsdf_ggx(SpeculaClosureQuery q, vec3 weight, float roughness, float anisotropy, int fresnel, vec3 f0, float ior,

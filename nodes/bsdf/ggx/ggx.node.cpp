@@ -53,7 +53,7 @@ void reg(NodeRegistry& r) {
     s.cpu = &cpu;
     s.glslFunction = "spc_bsdf_ggx";
     s.glslFile = "bsdf/ggx/ggx.glsl";
-    s.glslLibraries = {"shared/ltc.glsl", "shared/fresnel_f0.glsl"};
+    s.glslLibraries = {"shared/ltc.glsl", "shared/fresnel_f0.glsl", "shared/ggx_microfacet.glsl"};
     // Polygon queries (LTC quad lights): the isotropic and anisotropic GGX fits and the mag/fres/sphere table.
     s.resources = {ltc::matrixResource(), ltc::amplitudeResource(), ltc::anisotropicResource()};
     r.add(std::move(s));
