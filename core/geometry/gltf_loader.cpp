@@ -457,6 +457,12 @@ GltfSceneInfo describeGltfScene(const std::string& path, bool binary,
         if (auto it = mat.extensions.find("KHR_materials_emissive_strength"); it != mat.extensions.end() &&
                                                                               it->second.Has("emissiveStrength"))
             out.emissive *= float(it->second.Get("emissiveStrength").GetNumberAsDouble());
+        if (auto it = mat.extensions.find("KHR_materials_transmission"); it != mat.extensions.end() &&
+                                                                         it->second.Has("transmissionFactor"))
+            out.transmission = std::clamp(float(it->second.Get("transmissionFactor").GetNumberAsDouble()), 0.f, 1.f);
+        // ior 0 is the extension's "no refraction"; bsdf.dielectric needs an index above 1.
+        if (auto it = mat.extensions.find("KHR_materials_ior"); it != mat.extensions.end() && it->second.Has("ior"))
+            out.ior = std::clamp(float(it->second.Get("ior").GetNumberAsDouble()), 1.0001f, 10.f);
         info.materials.push_back(std::move(out));
     }
     // Walk the instanced node tree: cameras, lights, and which materials triangles use, with world bounds.

@@ -48,6 +48,7 @@ struct GltfSceneInfo {
         Vec4 baseColor{1.f};
         float metallic = 1.f, roughness = 1.f, normalScale = 1.f;
         Vec3 emissive{0.f};
+        float transmission = 0.f, ior = 1.5f;  // KHR_materials_transmission (factor only), KHR_materials_ior
         std::string baseColorTexture, metallicRoughnessTexture, normalTexture, emissiveTexture;  // "" = none
     };
     std::vector<Material> materials;

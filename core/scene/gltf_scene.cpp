@@ -57,8 +57,11 @@ std::string saveImage(const std::vector<unsigned char>& bytes, const std::string
 }
 
 // A metallic-roughness material as a graph: diffuse base·(1 − metallic) plus GGX with F0 = mix(0.04, base, metallic)
-// and α = roughness², a tangent-space normal map, and emission (glTF 2.0 §B, without the specular/transmission
-// extensions). Texture channels as the spec says: roughness in G, metallic in B, colours sRGB, data raw.
+// and α = roughness², a tangent-space normal map, and emission (glTF 2.0 §B). KHR_materials_transmission mixes in
+// bsdf.dielectric (IOR from KHR_materials_ior, tinted by the base colour) by transmissionFactor·(1 − metallic): every
+// mesh is then a solid boundary that refracts (KHR_materials_volume's thin-walled default and thickness are not
+// modelled, nor the transmission texture). Texture channels as the spec says: roughness in G, metallic in B, colours
+// sRGB, data raw.
 nlohmann::json materialGraph(const GltfSceneInfo::Material& m) {
     nlohmann::json nodes = nlohmann::json::object();
     auto image = [&](const std::string& id, const std::string& file, const char* colorspace) {
@@ -101,6 +104,21 @@ nlohmann::json materialGraph(const GltfSceneInfo::Material& m) {
     }
     nodes["surface"] = {{"type", "closure.add"}, {"inputs", {{"a", "@diffuse.bsdf"}, {"b", "@specular.bsdf"}}}};
     std::string output = "@surface.bsdf";
+    if (m.transmission > 0.f) {
+        nodes["glass"] = {{"type", "bsdf.dielectric"},
+                          {"inputs", {{"roughness", roughness}, {"ior", m.ior}, {"transmission_tint", base}}}};
+        if (!m.normalTexture.empty()) nodes["glass"]["inputs"]["normal"] = "@normal_map.normal";
+        nlohmann::json t = m.transmission;
+        if (metallic.is_number()) {
+            t = m.transmission * (1.f - m.metallic);
+        } else {
+            nodes["transmission"] = {{"type", "math.mix.float"}, {"inputs", {{"a", m.transmission}, {"b", 0.f}, {"t", metallic}}}};
+            t = "@transmission.out";
+        }
+        nodes["surface_with_transmission"] = {{"type", "closure.mix"},
+                                              {"inputs", {{"a", "@surface.bsdf"}, {"b", "@glass.bsdf"}, {"t", t}}}};
+        output = "@surface_with_transmission.bsdf";
+    }
     if (!m.emissiveTexture.empty() || maxComponent(m.emissive) > 0.f) {
         nlohmann::json emitted = vec(m.emissive);
         if (!m.emissiveTexture.empty()) {
@@ -109,7 +127,7 @@ nlohmann::json materialGraph(const GltfSceneInfo::Material& m) {
             emitted = "@emission_color.out";
         }
         nodes["emission"] = {{"type", "bsdf.emission"}, {"inputs", {{"color", emitted}}}};
-        nodes["surface_and_emission"] = {{"type", "closure.add"}, {"inputs", {{"a", "@surface.bsdf"}, {"b", "@emission.bsdf"}}}};
+        nodes["surface_and_emission"] = {{"type", "closure.add"}, {"inputs", {{"a", output}, {"b", "@emission.bsdf"}}}};
         output = "@surface_and_emission.bsdf";
     }
     return {{"nodes", nodes}, {"output", output}};

@@ -194,7 +194,23 @@ wt.links.new(env_tex.outputs["Color"], wt.nodes["Background"].inputs["Color"])
 wt.nodes["Background"].inputs["Strength"].default_value = 2.0
 scene.camera.data.sensor_fit = "VERTICAL"
 scene.camera.data.sensor_height = 24.0
+glass_mat = bpy.data.materials.new("Glass")
+glass_mat.use_nodes = True
+gt = glass_mat.node_tree
+gt.nodes.remove(gt.nodes["Principled BSDF"])
+glass = gt.nodes.new("ShaderNodeBsdfGlass")
+glass.inputs["Roughness"].default_value = 0.2
+glass.inputs["IOR"].default_value = 1.33
+glass.inputs["Color"].default_value = (0.9, 0.95, 1.0, 1.0)
+gt.links.new(glass.outputs[0], gt.nodes["Material Output"].inputs["Surface"])
+bpy.ops.mesh.primitive_cube_add(size=0.5, location=(0.0, 0.0, 0.5))
+bpy.context.active_object.data.materials.append(glass_mat)
 path, result, data = export_dict("exporter2")
+glass_nodes = list(data["materials"]["Glass"]["nodes"].values())
+check("Glass BSDF -> bsdf.dielectric with its roughness, IOR and colour",
+      len(glass_nodes) == 1 and glass_nodes[0]["type"] == "bsdf.dielectric"
+      and abs(glass_nodes[0]["inputs"]["roughness"] - 0.2) < 1e-6 and abs(glass_nodes[0]["inputs"]["ior"] - 1.33) < 1e-6
+      and np.allclose(glass_nodes[0]["inputs"]["weight"], [0.9, 0.95, 1.0]), str(glass_nodes))
 mixed_types = sorted(n["type"] for n in data["materials"]["Mixed"]["nodes"].values())
 check("Mix(Diffuse(image), Glossy) -> closure.mix of bsdf.diffuse and GGX",
       mixed_types == ["bsdf.diffuse", "bsdf.ggx_filtered", "closure.mix", "texture.image"], str(mixed_types))

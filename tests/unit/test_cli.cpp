@@ -814,6 +814,24 @@ TEST(Cli, GltfFilesRenderAsScenes) {
     test::writeFile(dir + "/nocamera.glb", "glTF" + u32(2) + u32(uint32_t(12 + 8 + json.size())) + u32(uint32_t(json.size())) +
                                                "JSON" + json);
     goldAt(dir + "/nocamera.glb", "glb", ratio);
+    // KHR_materials_transmission + KHR_materials_ior: the gold material made a 90 % transmissive dielectric of IOR 1.45.
+    nlohmann::json t = nlohmann::json::parse(test::readFile(file));
+    for (auto& img : t["images"]) img["uri"] = test::sourcePath("tests/unit/data/gltf/") + img["uri"].get<std::string>();
+    for (auto& mat : t["materials"])
+        if (mat["name"] == "gold") {
+            mat["pbrMetallicRoughness"]["metallicFactor"] = 0.0;
+            mat["extensions"] = {{"KHR_materials_transmission", {{"transmissionFactor", 0.9}}},
+                                 {"KHR_materials_ior", {{"ior", 1.45}}}};
+        }
+    test::writeFile(dir + "/glass.gltf", t.dump());
+    const nlohmann::json glassDoc = gltfSceneDocument(dir + "/glass.gltf");
+    const nlohmann::json& glass = glassDoc["materials"]["gold"];
+    EXPECT_EQ(glass["output"], "@surface_with_transmission.bsdf");
+    EXPECT_EQ(glass["nodes"]["glass"]["type"], "bsdf.dielectric");
+    EXPECT_NEAR(glass["nodes"]["glass"]["inputs"]["ior"].get<double>(), 1.45, 1e-6);
+    EXPECT_NEAR(glass["nodes"]["surface_with_transmission"]["inputs"]["t"].get<double>(), 0.9, 1e-6);
+    ASSERT_EQ(test::runCli("render " + q(dir + "/glass.gltf") + " -o " + q(dir + "/glass.exr") +
+                               " --spp 2 --resolution 48x32 --progress none", &out), 0) << out;
     unsetenv("SPECULA_RESOURCE_PATH");
     EXPECT_GT(ratio, 1.5f) << "the .glb renders as the .gltf";
     // Not a glTF: a clear I/O error naming the file.

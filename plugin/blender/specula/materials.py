@@ -300,6 +300,7 @@ class MaterialTranslator:
             "ShaderNodeBsdfDiffuse": self._diffuse,
             "ShaderNodeBsdfGlossy": self._glossy,
             "ShaderNodeBsdfAnisotropic": self._glossy,
+            "ShaderNodeBsdfGlass": self._glass,
             "ShaderNodeEmission": self._emission,
             "ShaderNodeMixShader": self._mix,
             "ShaderNodeAddShader": self._add_shader,
@@ -347,6 +348,18 @@ class MaterialTranslator:
         inputs = {"weight": color, "alpha": [min(ax, 1.0), min(ay, 1.0)], "filter": "none", "f0": 1.0}
         inputs.update(normal)
         return "@%s.bsdf" % self.add("bsdf.ggx_filtered", inputs, node)
+
+    def _glass(self, node):
+        """Cycles' Glass BSDF as bsdf.dielectric: its colour tints reflection and refraction alike (the node's weight),
+        roughness as GGX's perceptual roughness, the IOR inverted inside closed objects as Cycles does."""
+        distribution = getattr(node, "distribution", "GGX")
+        if distribution not in ("GGX", "SHARP"):
+            self.warn("%s: glass distribution %s is rendered as single-scattering GGX" % (self.where(node), distribution))
+        inputs = {"weight": self._value(node.inputs["Color"], self.ctx, "color3"),
+                  "roughness": 0.0 if distribution == "SHARP" else self._value(node.inputs["Roughness"], self.ctx, "float"),
+                  "ior": min(max(self.constant(node, "IOR"), 1.0001), 10.0)}
+        inputs.update(self.normal(node, "Normal"))
+        return "@%s.bsdf" % self.add("bsdf.dielectric", inputs, node)
 
     def _emission(self, node):
         return "@%s.bsdf" % self.add("bsdf.emission", {
