@@ -275,3 +275,14 @@ vec3 spc_ltc_environment(mat3 invM, vec3 T, vec3 B, vec3 N) {
     return spc_host_environment(T * d.x + B * d.y + N * d.z, alpha);
 }
 vec3 spc_ltc_fresnel_scale(vec3 F0, vec2 magFres) { return F0 * magFres.x + (vec3(1.0) - F0) * magFres.y; }
+
+// The fitted GGX LTC of (αx, αy) for the local view lo integrated over the query's polygon, without Fresnel (CPU:
+// ltc::GgxPolygonLobe::integratePolygon); invM and magFres come back for the Fresnel weighting (spc_ltc_fresnel_scale)
+// and the environment lookup (spc_ltc_environment). Shared by bsdf.ggx and bsdf.dielectric.
+float spc_ltc_ggx_polygon(SpeculaClosureQuery q, sampler2D ltc_matrix, sampler2D ltc_amplitude, sampler2D ltc_anisotropic,
+                          float ax, float ay, vec3 lo, vec3 T, vec3 B, vec3 N, out mat3 invM, out vec2 magFres) {
+    spc_ltc_ggx_axes(ltc_matrix, ltc_amplitude, ltc_anisotropic, ax, ay, lo, invM, magFres);
+    vec3 p[4];
+    spc_ltc_local_polygon(q, T, B, N, p);
+    return spc_ltc_integrate(invM, p, q.vertex_count, q.horizon, ltc_amplitude);
+}

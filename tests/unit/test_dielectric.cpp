@@ -20,14 +20,7 @@ using namespace specula;
 
 namespace {
 
-struct Rng {
-    uint64_t s;
-    float next() { return float(mix64(++s) >> 40) * (1.f / 16777216.f); }
-    Vec2 next2() {
-        float a = next();
-        return {a, next()};
-    }
-};
+using test::Rng;
 
 Vec3 dirFromTheta(float thetaDeg) {
     const float t = glm::radians(thetaDeg);

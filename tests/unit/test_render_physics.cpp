@@ -21,15 +21,7 @@ namespace {
 
 Scene sceneFrom(const std::string& json) { return loadSceneFromString(json, test::sourcePath("examples")); }
 
-// Deterministic uniform numbers for Monte Carlo checks.
-struct Rng {
-    uint64_t s;
-    float next() { return float(mix64(++s) >> 40) * (1.f / 16777216.f); }
-    Vec2 next2() {
-        float a = next();
-        return {a, next()};
-    }
-};
+using test::Rng;
 
 Vec3 dirFromTheta(float thetaDeg, float phiDeg = 0.f) {
     float t = glm::radians(thetaDeg), p = glm::radians(phiDeg);

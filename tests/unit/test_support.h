@@ -2,11 +2,22 @@
 #pragma once
 
 #include "core/render/bsdf.h"
+#include "core/render/sampler.h"
 
 #include <limits>
 #include <string>
 
 namespace specula::test {
+
+// Deterministic uniform floats in [0, 1) for Monte Carlo checks (24-bit, from mix64 of a counter).
+struct Rng {
+    uint64_t s;
+    float next() { return float(mix64(++s) >> 40) * (1.f / 16777216.f); }
+    Vec2 next2() {
+        float a = next();
+        return {a, next()};
+    }
+};
 
 // A direction query of a closure (world-space wo, wi), as the integrator asks it.
 inline BsdfValue query(const Closure& c, const Vec3& wo, const Vec3& wi,

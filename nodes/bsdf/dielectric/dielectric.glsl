@@ -35,10 +35,7 @@ void spc_bsdf_dielectric(SpeculaClosureQuery q, vec3 weight, vec3 reflection_tin
         if (o.z <= 0.0) return;
         mat3 invM;
         vec2 magFres;
-        spc_ltc_ggx_axes(ltc_matrix, ltc_amplitude, ltc_anisotropic, ax, ay, o, invM, magFres);
-        vec3 p[4];
-        spc_ltc_local_polygon(q, T, B, N, p);
-        float e = spc_ltc_integrate(invM, p, q.vertex_count, q.horizon, ltc_amplitude);
+        float e = spc_ltc_ggx_polygon(q, ltc_matrix, ltc_amplitude, ltc_anisotropic, ax, ay, o, T, B, N, invM, magFres);
         vec3 r = reflection_tint * (spc_ltc_fresnel_scale(vec3(spc_fresnel_dielectric(1.0, eta)), magFres) * e);
         if (q.kind == SPC_QUERY_ENVIRONMENT) {
             r *= spc_ltc_environment(invM, T, B, N);

@@ -17,10 +17,7 @@ void spc_bsdf_ggx(SpeculaClosureQuery q, vec3 weight, float roughness, float ani
         if (lo.z <= 0.0) return;
         mat3 invM;
         vec2 magFres;
-        spc_ltc_ggx_axes(ltc_matrix, ltc_amplitude, ltc_anisotropic, ax, ay, lo, invM, magFres);
-        vec3 p[4];
-        spc_ltc_local_polygon(q, T, B, N, p);
-        float e = spc_ltc_integrate(invM, p, q.vertex_count, q.horizon, ltc_amplitude);
+        float e = spc_ltc_ggx_polygon(q, ltc_matrix, ltc_amplitude, ltc_anisotropic, ax, ay, lo, T, B, N, invM, magFres);
         bsdf.f = weight * (spc_ltc_fresnel_scale(spc_fresnel_f0(fresnel, f0, ior, eta, k), magFres) * e);
         if (q.kind == SPC_QUERY_ENVIRONMENT) bsdf.f *= spc_ltc_environment(invM, T, B, N);
         return;
