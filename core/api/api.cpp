@@ -60,6 +60,28 @@ std::string unescapeToken(const std::string& t) {
     return s;
 }
 
+}  // namespace
+
+void LoadOptions::setLimit(const std::string& name, int64_t value) {
+    SceneLimits l;  // the built-in maxima, checked and parsed by the same rule as the CLI's --limit
+    try {
+        setSceneLimit(l, name + "=" + std::to_string(value));
+    } catch (const std::invalid_argument& e) {
+        std::string m = e.what();  // the CLI's wording names its option: "--limit: ..." / "--limit spp ..."
+        if (m.rfind("--", 0) == 0) m = m.substr(2);
+        throw Error(ErrorCode::Usage, "", m);
+    }
+    const SceneLimits builtin;
+    if (l.maxPixels != builtin.maxPixels) maxPixels = l.maxPixels;
+    if (l.maxTriangles != builtin.maxTriangles) maxTriangles = l.maxTriangles;
+    if (l.maxSpp != builtin.maxSpp) maxSpp = l.maxSpp;
+    if (l.maxTextureSide != builtin.maxTextureSide) maxTextureSide = l.maxTextureSide;
+    if (l.maxGraphNodes != builtin.maxGraphNodes) maxGraphNodes = l.maxGraphNodes;
+    if (l.maxJsonDepth != builtin.maxJsonDepth) maxJsonDepth = l.maxJsonDepth;
+}
+
+namespace {
+
 SceneOverrides overridesOf(const LoadOptions& o) {
     SceneOverrides ov;
     ov.spp = o.spp;

@@ -71,6 +71,10 @@ struct LoadOptions {
     // can exceed it. Beyond a cap the load fails with Error bad_input at the JSON pointer of what exceeds it.
     int64_t maxPixels = 0, maxTriangles = 0;
     int maxSpp = 0, maxTextureSide = 0, maxGraphNodes = 0, maxJsonDepth = 0;
+    // Sets one cap by the CLI's name (`specula render --limit NAME=VALUE`: pixels, spp, triangles, texture_side,
+    // graph_nodes, json_depth). Throws Error (usage) for an unknown name, naming the nearest, or a value outside
+    // 1 .. the built-in maximum.
+    void setLimit(const std::string& name, int64_t value);
 };
 
 struct RenderOptions {

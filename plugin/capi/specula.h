@@ -23,7 +23,7 @@ extern "C" {
  * meaning or layout; the minor when something is added. A host built against ABI M.m works with a library
  * of the same M and a minor >= m (spc_abi_compatible). */
 #define SPC_ABI_VERSION_MAJOR 1
-#define SPC_ABI_VERSION_MINOR 0
+#define SPC_ABI_VERSION_MINOR 1
 #define SPC_ABI_VERSION ((uint32_t)((SPC_ABI_VERSION_MAJOR << 16) | SPC_ABI_VERSION_MINOR))
 
 /* The library's ABI version, (major << 16) | minor. */
@@ -83,8 +83,14 @@ typedef struct spc_load_options {
     int64_t seed;                                /* < 0: the scene's */
     int32_t width, height;                       /* 0: the scene's */
     int32_t crop_x0, crop_y0, crop_x1, crop_y1;  /* all 0: the whole frame; else [x0,x1)x[y0,y1) frame pixels */
+    /* Since ABI 1.1: a host's caps on what the scene may ask for (as `specula render --limit`; docs/reliability.md
+     * "Limits"); 0: the built-in maximum, which no cap can exceed (a larger one is SPC_USAGE). Beyond a cap the
+     * load fails with SPC_BAD_INPUT at the JSON pointer of what exceeds it. A host built against 1.0 passes the
+     * smaller size and gets the built-in maxima. */
+    int64_t max_pixels, max_triangles;
+    int32_t max_spp, max_texture_side, max_graph_nodes, max_json_depth;
 } spc_load_options;
-#define SPC_LOAD_OPTIONS_INIT {(uint32_t)sizeof(spc_load_options), 0, -1, 0, 0, 0, 0, 0, 0}
+#define SPC_LOAD_OPTIONS_INIT {(uint32_t)sizeof(spc_load_options), 0, -1, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0}
 
 /* Loads a scene file (relative paths inside resolve against its folder); opts may be NULL. */
 SPC_API spc_status spc_scene_load_file(spc_context* ctx, const char* path, const spc_load_options* opts, spc_scene** out);

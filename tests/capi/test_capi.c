@@ -5,6 +5,7 @@
 #include <specula/specula_c.h>
 
 #include <dlfcn.h>
+#include <stddef.h>
 #include <math.h>
 #include <pthread.h>
 #include <stdio.h>
@@ -339,7 +340,25 @@ int main(int argc, char** argv) {
             A.spc_result_destroy(r2);
             r2 = NULL;
             A.spc_scene_destroy(small);
-            printf("load options: resolution, spp and crop applied\n");
+            /* ABI 1.1 limits: a cap below the scene's 4 spp is bad input at its pointer; a cap above the built-in
+             * maximum is a usage error; a 1.0-sized struct (no limits) still loads. */
+            lo = (spc_load_options)SPC_LOAD_OPTIONS_INIT;
+            lo.max_spp = 2;
+            expectError(ctx, A.spc_scene_load_string(ctx, kScene, "", &lo, &small), SPC_BAD_INPUT, "/render/spp",
+                        "max_spp 2 below the scene's 4 spp");
+            CHECK(small == NULL);
+            lo.max_spp = 0;
+            lo.max_json_depth = 1000;
+            expectError(ctx, A.spc_scene_load_string(ctx, kScene, "", &lo, &small), SPC_USAGE, NULL,
+                        "max_json_depth 1000 above the built-in 64");
+            CHECK(strstr(A.spc_last_error(ctx), "json_depth") != NULL);
+            lo = (spc_load_options)SPC_LOAD_OPTIONS_INIT;
+            lo.size = (uint32_t)offsetof(spc_load_options, max_pixels);
+            lo.max_spp = 2; /* beyond a 1.0 host's struct: not read */
+            OK(ctx, A.spc_scene_load_string(ctx, kScene, "", &lo, &small));
+            A.spc_scene_destroy(small);
+            small = NULL;
+            printf("load options: resolution, spp, crop and limits applied\n");
         }
     }
 

@@ -86,6 +86,20 @@ def test_load_overrides():
     assert r["beauty"].shape == (12, 16, 3) and r.stats.samples == 16 * 12 * 2
 
 
+def test_load_limits():
+    # The CLI's --limit names: a cap below the scene's spp is bad input at its pointer; an unknown name or a cap above
+    # the built-in maximum is a usage error naming the nearest name.
+    with pytest.raises(specula.BadInputError) as e:
+        specula.Scene.from_dict(SCENE, limits={"spp": 2})
+    assert e.value.pointer == "/render/spp"
+    assert scene(limits={"spp": 4, "pixels": 32 * 24}).render().stats.samples == 32 * 24 * 4
+    with pytest.raises(specula.UsageError) as e:
+        specula.Scene.from_dict(SCENE, limits={"pixel": 10})
+    assert "pixels" in str(e.value)
+    with pytest.raises(specula.UsageError):
+        specula.Scene.from_dict(SCENE, limits={"json_depth": 1000})
+
+
 def test_progress_tiles_cover_image():
     seen = []
     r = scene().render(progress=lambda t: seen.append(t))
