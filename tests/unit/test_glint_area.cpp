@@ -106,14 +106,19 @@ std::vector<Case> randomCases(int count, uint32_t seed, bool ggaa = false) {
         c.p.logDensity = 8.f + 14.f * U(rng);
         c.p.ggaa = ggaa;
         if (ggaa) {
-            c.in.diff.dnx = Vec2(0.2f * U(rng) - 0.1f, 0.2f * U(rng) - 0.1f);
-            c.in.diff.dny = Vec2(0.2f * U(rng) - 0.1f, 0.2f * U(rng) - 0.1f);
+            // Draws sequenced in gcc's former right-to-left argument order (the order of a call's arguments is
+            // unspecified: clang's differs, and a test's inputs must not depend on the compiler).
+            const float dxY = 0.2f * U(rng) - 0.1f, dxX = 0.2f * U(rng) - 0.1f;
+            c.in.diff.dnx = Vec2(dxX, dxY);
+            const float dyY = 0.2f * U(rng) - 0.1f, dyX = 0.2f * U(rng) - 0.1f;
+            c.in.diff.dny = Vec2(dyX, dyY);
         }
         const float th = 1.2f * U(rng), ph = 2 * kPi * U(rng);
         c.wo = Vec3(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th));
         // Footprint: |duv| from 2e-4 to 2e-2 (LOD ~3 to ~10), anisotropic up to 4:1.
         const float len = 2e-4f * std::pow(100.f, U(rng)), an = 1.f + 3.f * U(rng), rot = kPi * U(rng);
-        c.in.uv = Vec2(U(rng), U(rng));
+        const float uvY = U(rng), uvX = U(rng);  // (sequenced as above)
+        c.in.uv = Vec2(uvX, uvY);
         c.in.duvdx = len * Vec2(std::cos(rot), std::sin(rot));
         c.in.duvdy = len / an * Vec2(-std::sin(rot), std::cos(rot));
         const Vec3 h = glm::normalize(Vec3(-c.p.sigmaX * N(rng), -c.p.sigmaY * N(rng), 1.f));
@@ -388,7 +393,8 @@ TEST(GlintArea, ShadowRayDirectionsFollowTheGlintIntegrand) {
         areaIntegral(c);  // the sampler reuses the cells of the last integral of the same query
         int inLeftCells = 0, inLeftCos = 0;
         for (int k = 0; k < N; ++k) {
-            const Vec2 u(U(rng), U(rng));
+            const float uY = U(rng), uX = U(rng);  // sequenced: gcc's former right-to-left argument order
+            const Vec2 u(uX, uY);
             const uint64_t seed = rng();
             Vec3 w;
             auto side = [&](const Vec3& wi) {  // light-plane coordinate s of direction wi (|s| <= 1 on the light)

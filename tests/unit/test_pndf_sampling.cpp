@@ -399,7 +399,8 @@ TEST(PndfSampling, KernelSamplerMomentsAndSupport) {
         double sum[2] = {}, sum2[2] = {}, cross = 0;
         int outside = 0, central = 0;
         for (int i = 0; i < n; ++i) {
-            const Vec2d d = sampleKernelOffset(fp, u(), u());
+            const double uB = u(), uA = u();  // sequenced: gcc's former right-to-left argument order
+            const Vec2d d = sampleKernelOffset(fp, uA, uB);
             sum[0] += d.x, sum[1] += d.y;
             sum2[0] += d.x * d.x, sum2[1] += d.y * d.y;
             cross += d.x * d.y;
@@ -501,7 +502,8 @@ TEST(PndfSampling, HistogramMatchesEval) {
         int outside = 0, failed = 0, viaCluster = 0;
         for (int i = 0; i < kSamples; ++i) {
             Vec2d s, x;
-            if (!samplePndf(m, fp, thr, u(), u(), s, &x)) {
+            const double uB = u(), uA = u();  // sequenced: gcc's former right-to-left argument order
+            if (!samplePndf(m, fp, thr, uA, uB, s, &x)) {
                 ++failed;
                 continue;
             }
@@ -608,7 +610,8 @@ TEST(PndfSampling, ExpectationsMatchTheIntegral) {
         Uniform u(555 + int(cf.kernel) + 10 * cf.clusters);
         for (int i = 0; i < kSamples; ++i) {
             Vec2d s;
-            ASSERT_TRUE(samplePndf(m, fp, thr, u(), u(), s));
+            const double uB = u(), uA = u();  // sequenced: gcc's former right-to-left argument order
+            ASSERT_TRUE(samplePndf(m, fp, thr, uA, uB, s));
             for (int k = 0; k < kG; ++k) {
                 const double v = gs[k].g(s);
                 sum[k] += v;
@@ -682,7 +685,8 @@ TEST(PndfSampling, EvalIsThePdfOfTheSamples) {
             if (pointwise) rep = representationTriangles(m, fp, thr);
             for (int i = 0; i < 400; ++i) {
                 Vec2d s, x;
-                ASSERT_TRUE(samplePndf(m, fp, thr, u(), u(), s, &x));
+                const double uB = u(), uA = u();  // sequenced: gcc's former right-to-left argument order
+                ASSERT_TRUE(samplePndf(m, fp, thr, uA, uB, s, &x));
                 ++samples;
                 if (kernelWeight(fp, x.x - fp.centreX, x.y - fp.centreY) <= 0) ++outsideKernel;
                 const double d = evalPndfHierarchy(m, fp, s, nullptr, thr);
