@@ -27,6 +27,9 @@ constexpr float kInv4Pi = 0.07957747154594766788f;
 inline float luminance(const Color3& c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
 inline float sqr(float x) { return x * x; }
 inline float safeSqrt(float x) { return std::sqrt(std::max(0.f, x)); }
+// A texel coordinate safe to convert to int: NaN becomes 0 and magnitudes beyond ±2^30 are clamped (a float that large
+// has no fraction left, and int(inf) is undefined behaviour: found by fuzz_scene through a LEAN lookup at an infinite uv).
+inline float texelCoordinate(float s) { return s == s ? std::clamp(s, -1073741824.f, 1073741824.f) : 0.f; }
 inline bool isFinite(const Vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 inline float maxComponent(const Vec3& v) { return std::max(v.x, std::max(v.y, v.z)); }
 

@@ -57,7 +57,7 @@ GlMipChain GlMipChain::build(int width, int height, std::vector<float> rgba) {
 
 Vec4 GlMipChain::bilinear(int l, Vec2 uv, TextureWrap wrap) const {
     const Level& L = levels_[size_t(l)];
-    const float s = uv.x * float(L.width) - 0.5f, t = uv.y * float(L.height) - 0.5f;
+    const float s = texelCoordinate(uv.x * float(L.width) - 0.5f), t = texelCoordinate(uv.y * float(L.height) - 0.5f);
     const float fs = std::floor(s), ft = std::floor(t);
     const int i0 = int(fs), j0 = int(ft);
     const float a = s - fs, b = t - ft;

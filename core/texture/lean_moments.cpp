@@ -151,7 +151,7 @@ LeanMoments LeanPyramid::texel(int l, int x, int y) const {
 
 LeanMoments LeanPyramid::bilinear(int l, Vec2 uv, LeanWrap wrap) const {
     const LeanLevel& L = levels_[size_t(l)];
-    float s = uv.x * float(L.width) - 0.5f, t = uv.y * float(L.height) - 0.5f;
+    float s = texelCoordinate(uv.x * float(L.width) - 0.5f), t = texelCoordinate(uv.y * float(L.height) - 0.5f);
     float fs = std::floor(s), ft = std::floor(t);
     int i0 = int(fs), j0 = int(ft);
     float a = s - fs, b = t - ft;

@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <limits>
 #include <random>
 
 using namespace specula;
@@ -71,6 +73,11 @@ TEST(GlMipChain, BilinearReproducesTexelsAndWraps) {
         EXPECT_FLOAT_EQ(c.bilinear(0, edge, TextureWrap::Mirror)[ch], last[ch]);
         EXPECT_FLOAT_EQ(c.bilinear(0, edge, TextureWrap::Black)[ch], 0.5f * last[ch]);
     }
+    // Non-finite and huge uvs convert to texel indices without undefined behaviour (UBSan aborts on int(inf)).
+    const float inf = std::numeric_limits<float>::infinity();
+    for (Vec2 uv : {Vec2(inf, 0.5f), Vec2(-inf, inf), Vec2(std::nanf(""), 0.2f), Vec2(3e9f, -3e9f)})
+        for (TextureWrap w : {TextureWrap::Repeat, TextureWrap::Clamp, TextureWrap::Mirror})
+            EXPECT_TRUE(isFinite(Vec3(c.bilinear(0, uv, w)))) << uv.x << ", " << uv.y;
 }
 
 TEST(GlMipChain, TrilinearAndAnisotropicFollowTheGlRules) {
