@@ -121,6 +121,22 @@ inline double visibleNdf(const D3& wo, const D3& h, const Sym2& A, double tau) {
     return g1(wo, A) * woh * ndf(h, A, tau) / wo.z;
 }
 
+// A roughness matrix made ready for many evaluations: the clamped inverse and the normaliser of Eq. 1 computed once,
+// so D(h) costs one division and Λ(w) one division and one square root. Same formulas as ndf() and lambda().
+struct PreparedGgx {
+    Sym2 A, inv;       // A and A⁻¹ = adj(A) / max(det A, τ)   (TK21 A.4)
+    double norm = 0;   // 1 / (π sqrt(max(det A, τ)))
+    PreparedGgx() = default;
+    PreparedGgx(const Sym2& a, double tau) : A(a) {
+        double r = 1.0 / std::max(a.det(), tau);
+        inv = a.adj() * r;
+        norm = std::sqrt(r) * (1.0 / kPiD);
+    }
+    // The bracket of Eq. 1, h⊥ᵀ A⁻¹ h⊥ + h_z²; D(h) = norm / e².
+    double ndfBracket(const D3& h) const { return inv.quad(h.x, h.y) + h.z * h.z; }
+    double lambda(const D3& w, double invZ2) const { return 0.5 * (-1.0 + std::sqrt(1.0 + std::max(0.0, A.quad(w.x, w.y)) * invZ2)); }
+};
+
 // ---- Filters (TK21 §3–5) -------------------------------------------------------------------------------------------
 
 enum class Filter : int { None = 0, Slope, Projected, ProjectedApprox, IsoMax, IsoSum, IsoMean, IsoRect };
@@ -259,23 +275,29 @@ inline D2 halfVectorQ(const D3& h, const D3& t, const D3& b, const D3& n, bool s
 
 // Analytic Δ_k q from the ray differentials (spec §5.1): dh = P(h)(dwo + dwi)/|H|,
 // Δh⊥ = (dh·t − h_z dn·t, dh·b − h_z dn·b), Δh∥ = −(Δh⊥ h_z − h⊥ dh_z)/h_z² with dh_z = dh·n + h·dn.
-inline void halfVectorDeltasAnalytic(const D3& wo, const D3& wi, const Differentials& df, double invLightDist, bool slope,
-                                     D2 out[2]) {
-    D3 H = wo + wi;
-    double len = glm::length(H);
-    D3 h = H / len;
+// This form takes the half vector h = H/|H| and 1/|H| from the caller (the lobe has them already): one division
+// fewer per axis than dividing by |H|, which matters because divisions are most of a filtered evaluation's cost.
+inline void halfVectorDeltasAnalytic(const D3& h, double invLen, const D3& wi, const Differentials& df, double invLightDist,
+                                     bool slope, D2 out[2]) {
+    const double invHz2 = slope ? 1.0 / (std::max(h.z, 1e-12) * std::max(h.z, 1e-12)) : 0.0;
     for (int k = 0; k < 2; ++k) {
         D3 dH = df.dwo[k] + lightDirectionDerivative(wi, df.dp[k], invLightDist);
-        D3 dh = (dH - h * glm::dot(h, dH)) / len;
+        D3 dh = (dH - h * glm::dot(h, dH)) * invLen;
         D2 dperp(dh.x - h.z * df.dn[k].x, dh.y - h.z * df.dn[k].y);
         if (!slope) {
             out[k] = dperp;
         } else {
             double dhz = dh.z + glm::dot(h, df.dn[k]);
             double hz = std::max(h.z, 1e-12);
-            out[k] = -(dperp * hz - D2(h.x, h.y) * dhz) / (hz * hz);
+            out[k] = -(dperp * hz - D2(h.x, h.y) * dhz) * invHz2;
         }
     }
+}
+inline void halfVectorDeltasAnalytic(const D3& wo, const D3& wi, const Differentials& df, double invLightDist, bool slope,
+                                     D2 out[2]) {
+    D3 H = wo + wi;
+    double invLen = 1.0 / glm::length(H);
+    halfVectorDeltasAnalytic(H * invLen, invLen, wi, df, invLightDist, slope, out);
 }
 
 // Quad Δ_k q (spec §5.2): q evaluated at the neighbour pixel with its own wo, wi (same light sample position) and
@@ -334,8 +356,8 @@ public:
                 if (s_.quad && s_.nb[k].valid) dn[k] = (s_.nb[k].n - D3(0, 0, 1)) * s_.nb[k].sign;
             fixed_ = filterIsotropic(s_.A, isotropicKernel(f, dn[0], dn[1], s_.params));
         }
-        sampling_ = fixed_;
-        samplingL_ = cholesky(sampling_);
+        sampling_ = PreparedGgx(fixed_, tau_);
+        samplingL_ = cholesky(fixed_);
     }
 
     LobeKind kind() const override { return LobeKind::Specular; }
@@ -345,34 +367,44 @@ public:
     // useQuad = false: analytic derivatives only (the sampling matrix).
     Sym2 filtered(const D3& wo, const D3& wi, double invLightDist, bool useQuad = true) const {
         if (!halfVector_) return fixed_;
-        const bool slope = s_.params.filter == Filter::Slope;
-        D2 dq[2] = {D2(0.0), D2(0.0)};
-        if (s_.diff.valid) halfVectorDeltasAnalytic(wo, wi, s_.diff, invLightDist, slope, dq);
-        if (s_.quad && useQuad) {
-            D3 H = wo + wi;
-            D2 qSelf = halfVectorQ(H / glm::length(H), D3(1, 0, 0), D3(0, 1, 0), D3(0, 0, 1), slope);
-            for (int k = 0; k < 2; ++k) halfVectorDeltaQuad(wi, qSelf, s_.nb[k], invLightDist, slope, dq[k]);
-        }
-        if (s_.params.filter == Filter::Projected) return filterProjected(s_.A, dq[0], dq[1], s_.params);
-        return filterAdditive(s_.A, dq[0], dq[1], s_.params);
+        D3 H = wo + wi;
+        double invLen = 1.0 / glm::length(H);
+        return filteredAt(H * invLen, invLen, wi, invLightDist, useQuad);
     }
 
-    // f·cos = F(wo·h) D_Ā(h) G2_Ā(wo, wi) / (4 wo_z); pdf = D_wo(h; Ā_s) / (4 wo·h).
+    // f·cos = F(wo·h) D_Ā(h) G2_Ā(wo, wi) / (4 wo_z); pdf = D_wo(h; Ā_s) / (4 wo·h) = D_Ā_s(h) G1_Ā_s(wo) / (4 wo_z)
+    // (Heitz 2018 Eq. 1: the wo·h of the VNDF cancels the reflection Jacobian's). Written for few divisions (they
+    // are most of the cost): both values share one reciprocal, and the matrices that do not depend on wi are prepared
+    // once (test FilteredGgxMath.FastEvaluationEqualsLongDoubleReference checks it against Eq. 1 and Eq. 99 directly).
     LobeValue evalPdf(const LobeQuery& q) const override {
         if (q.wo.z <= 0.f || q.wi.z <= 0.f) return {};
-        D3 wo(q.wo), wi(q.wi);
-        D3 H = wo + wi;
-        double len = glm::length(H);
+        const D3 wo(q.wo), wi(q.wi);
+        const D3 H = wo + wi;
+        const double len = glm::length(H);
         if (len == 0.0) return {};
-        D3 h = H / len;
+        const double invLen = 1.0 / len;
+        const D3 h = H * invLen;
+        const double invWoZ2 = 1.0 / (wo.z * wo.z), invWiZ2 = 1.0 / (wi.z * wi.z);
+        PreparedGgx filteredHere;
+        if (halfVector_) filteredHere = PreparedGgx(filteredAt(h, invLen, wi, invLightDistance(q.lightDistance), true), tau_);
+        const PreparedGgx& P = halfVector_ ? filteredHere : sampling_;
+        const double e = P.ndfBracket(h);
+        const double lo = P.lambda(wo, invWoZ2);
+        const double x = 1.0 + lo + P.lambda(wi, invWiZ2);  // 1/G2
+        double y, es;                                        // 1/G1 and the bracket under the sampling matrix
+        if (halfVector_) {
+            y = 1.0 + sampling_.lambda(wo, invWoZ2);
+            es = sampling_.ndfBracket(h);
+        } else {
+            y = 1.0 + lo;
+            es = e;
+        }
+        // f·cos = norm/(e² x 4 wo_z), pdf = norm_s/(e_s² y 4 wo_z): one reciprocal of the product.
+        const double e2 = e * e, es2 = es * es;
+        const double inv = 1.0 / (4.0 * wo.z * e2 * es2 * x * y);
         LobeValue r;
-        Sym2 Ab = filtered(wo, wi, invLightDistance(q.lightDistance));
-        double d = ndf(h, Ab, tau_);
-        double g = g2(wo, wi, Ab);
-        float v = float(d * g / (4.0 * wo.z));
-        r.f = tint_ * fresnel_.eval(float(glm::dot(wo, h))) * v;
-        double woh = glm::dot(wo, h);
-        if (woh > 0.0) r.pdf = float(visibleNdf(wo, h, sampling_, tau_) / (4.0 * woh));
+        r.f = tint_ * fresnel_.eval(float(glm::dot(wo, h))) * float(P.norm * es2 * y * inv);
+        r.pdf = float(sampling_.norm * e2 * x * inv);
         return r;
     }
     bool sample(const LobeQuery& q, const Vec2& u, Vec3& wi) const override {
@@ -391,7 +423,7 @@ public:
         Sym2 Ab = filtered(D3(q.wo), D3(q.wi), invLightDistance(q.lightDistance));
         out.push_back({"roughness_matrix", {s_.A.a, s_.A.c, s_.A.d}});
         out.push_back({"filtered_roughness_matrix", {Ab.a, Ab.c, Ab.d}});
-        out.push_back({"sampling_roughness_matrix", {sampling_.a, sampling_.c, sampling_.d}});
+        out.push_back({"sampling_roughness_matrix", {sampling_.A.a, sampling_.A.c, sampling_.A.d}});
         out.push_back({"filtered_alpha", {std::sqrt(Ab.a), std::sqrt(Ab.d)}});
     }
 
@@ -399,24 +431,37 @@ public:
     // `none` the exact filtered matrix; for half-vector filters the filter at the mirror configuration, which is what
     // the lobe samples), via its principal axes in the anisotropic table (ltc::ggxRoughnessMatrix).
     ltc::Ltc computePolygonLtc(const Vec3& wo) const {
-        return ltc::ggxRoughnessMatrix(ltc::builtinTables(), sampling_.a, sampling_.c, sampling_.d, wo);
+        return ltc::ggxRoughnessMatrix(ltc::builtinTables(), sampling_.A.a, sampling_.A.c, sampling_.A.d, wo);
     }
     const Fresnel& polygonFresnel() const { return fresnel_; }
     Color3 polygonTint() const { return tint_; }
 
     const Sym2& unfiltered() const { return s_.A; }
-    const Sym2& samplingMatrix() const { return sampling_; }
+    const Sym2& samplingMatrix() const { return sampling_.A; }
     double tau() const { return tau_; }
     // Filtered matrix at the mirror configuration (the sampling matrix; debug output filtered_alpha).
     void setSamplingFromMirror(const D3& wo) {
         if (!halfVector_ || wo.z <= 0.0) return;
         D3 wi(-wo.x, -wo.y, wo.z);
-        sampling_ = filtered(wo, wi, 0.0, false);
-        samplingL_ = cholesky(sampling_);
+        Sym2 s = filtered(wo, wi, 0.0, false);
+        sampling_ = PreparedGgx(s, tau_);
+        samplingL_ = cholesky(s);
         invalidatePolygonLtc();
     }
 
 private:
+    // The half-vector filter for h = (wo + wi)/|wo + wi| given with 1/|wo + wi|.
+    Sym2 filteredAt(const D3& h, double invLen, const D3& wi, double invLightDist, bool useQuad) const {
+        const bool slope = s_.params.filter == Filter::Slope;
+        D2 dq[2] = {D2(0.0), D2(0.0)};
+        if (s_.diff.valid) halfVectorDeltasAnalytic(h, invLen, wi, s_.diff, invLightDist, slope, dq);
+        if (s_.quad && useQuad) {
+            D2 qSelf = halfVectorQ(h, D3(1, 0, 0), D3(0, 1, 0), D3(0, 0, 1), slope);
+            for (int k = 0; k < 2; ++k) halfVectorDeltaQuad(wi, qSelf, s_.nb[k], invLightDist, slope, dq[k]);
+        }
+        if (s_.params.filter == Filter::Projected) return filterProjected(s_.A, dq[0], dq[1], s_.params);
+        return filterAdditive(s_.A, dq[0], dq[1], s_.params);
+    }
     static double invLightDistance(float dist) {
         return (std::isfinite(dist) && dist > 0.f) ? 1.0 / double(dist) : 0.0;
     }
@@ -425,7 +470,8 @@ private:
     Color3 tint_;
     double tau_ = 0;
     bool halfVector_ = false;
-    Sym2 fixed_, sampling_;
+    Sym2 fixed_;
+    PreparedGgx sampling_;  // Ā_s, prepared (equal to fixed_ unless the filter depends on the half vector)
     Chol2 samplingL_;
 };
 
