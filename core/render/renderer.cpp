@@ -42,6 +42,26 @@ struct Accum {
     int n = 0;
 };
 
+// Adds a block's sums to the pixel's (the first block is assigned, so that a render of one block is the plain sum).
+// With several blocks the block's depth sum is rounded to float first: a farm piece stores it as a float, and the
+// merge must add exactly what the single-process render adds.
+void foldBlock(Accum& total, const Accum& block, bool first, bool severalBlocks) {
+    const double depth = severalBlocks ? double(float(block.depth)) : block.depth;
+    if (first) {
+        total = block;
+        total.depth = depth;
+        return;
+    }
+    total.beauty += block.beauty;
+    total.diffuse += block.diffuse;
+    total.specular += block.specular;
+    total.albedo += block.albedo;
+    total.normal += block.normal;
+    total.uv += block.uv;
+    total.depth += depth;
+    total.n += block.n;
+}
+
 bool finiteSample(const SampleValue& v) {
     return isFinite(v.beauty) && isFinite(v.diffuse) && isFinite(v.specular) && isFinite(v.albedo) &&
            isFinite(v.normal) && std::isfinite(v.uv.x) && std::isfinite(v.uv.y) && std::isfinite(v.depth);
@@ -82,7 +102,7 @@ RenderOutput renderScene(const Scene& scene, const RenderOptions& options) {
         img.aovs.push_back(std::move(b));
         return &img.aovs.back();
     };
-    img.aovs.reserve(7);
+    img.aovs.reserve(8);
     AovBuffer* beauty = addAov("beauty", {"R", "G", "B"});
     AovBuffer* diffuse = addAov("diffuse", {"R", "G", "B"});
     AovBuffer* specular = addAov("specular", {"R", "G", "B"});
@@ -90,6 +110,13 @@ RenderOutput renderScene(const Scene& scene, const RenderOptions& options) {
     AovBuffer* normal = addAov("normal", {"X", "Y", "Z"});
     AovBuffer* uvAov = addAov("uv", {"U", "V"});
     AovBuffer* depthAov = addAov("depth", {"Z"});
+    // Sample blocks (RenderSettings::sampleBlock) and the one block a farm piece renders.
+    const bool splitPiece = rs.sampleSplitCount > 0;
+    const int block = splitPiece ? rs.spp / rs.sampleSplitCount : (rs.sampleBlock > 0 ? std::min(rs.sampleBlock, rs.spp) : rs.spp);
+    const int sampleBegin = splitPiece ? rs.sampleSplitIndex * block : 0;
+    const int sampleEnd = splitPiece ? sampleBegin + block : rs.spp;
+    const bool severalBlocks = block < rs.spp;
+    AovBuffer* countAov = splitPiece ? addAov("samples", {"N"}) : nullptr;
 
     Accel accel(scene);
     PerspectiveCamera camera(scene.camera, rs.width, rs.height);
@@ -119,8 +146,15 @@ RenderOutput renderScene(const Scene& scene, const RenderOptions& options) {
                 return;  // tile stays partially rendered; counted as not done
             }
             for (int x = tx0; x < tx1; ++x) {
-                Accum acc;
-                for (int s = 0; s < rs.spp; ++s) {
+                Accum acc, blockAcc;
+                bool firstBlock = true;
+                for (int s = sampleBegin; s < sampleEnd; ++s) {
+                    // Block boundaries are fixed sample indices, whichever samples a process renders.
+                    if (s > sampleBegin && s % block == 0) {
+                        foldBlock(acc, blockAcc, firstBlock, severalBlocks);
+                        blockAcc = Accum{};
+                        firstBlock = false;
+                    }
                     // Checked every 32 samples, not per row: at high spp one row of a tile is seconds of work, and
                     // hosts promise that cancel stops a render within a second. An unfinished pixel stays 0.
                     if ((s & 31) == 31 && options.cancel && options.cancel->load(std::memory_order_relaxed)) {
@@ -149,18 +183,21 @@ RenderOutput renderScene(const Scene& scene, const RenderOptions& options) {
                         ++tileInvalid;
                         continue;
                     }
-                    acc.beauty += v.beauty;
-                    acc.diffuse += v.diffuse;
-                    acc.specular += v.specular;
-                    acc.albedo += v.albedo;
-                    acc.normal += v.normal;
-                    acc.uv += v.uv;
-                    acc.depth += v.depth;
-                    ++acc.n;
+                    blockAcc.beauty += v.beauty;
+                    blockAcc.diffuse += v.diffuse;
+                    blockAcc.specular += v.specular;
+                    blockAcc.albedo += v.albedo;
+                    blockAcc.normal += v.normal;
+                    blockAcc.uv += v.uv;
+                    blockAcc.depth += v.depth;
+                    ++blockAcc.n;
                 }
+                foldBlock(acc, blockAcc, firstBlock, severalBlocks);
                 const size_t pix = size_t(y - crop.y0) * W + (x - crop.x0);
+                if (countAov) countAov->pixels[pix] = float(acc.n);
                 if (acc.n > 0) {
-                    const float inv = 1.f / float(acc.n);
+                    // A farm piece keeps sums (the merge divides by the total count of all pieces).
+                    const float inv = splitPiece ? 1.f : 1.f / float(acc.n);
                     auto put3 = [&](AovBuffer* b, const Vec3& c) {
                         b->pixels[pix * 3 + 0] = c.x;
                         b->pixels[pix * 3 + 1] = c.y;
@@ -215,6 +252,15 @@ RenderOutput renderScene(const Scene& scene, const RenderOptions& options) {
     out.stats.seconds = std::chrono::duration<double>(Clock::now() - start).count();
     img.metadata["specula:spp"] = std::to_string(rs.spp);
     img.metadata["specula:seed"] = std::to_string(rs.seed);
+    // What a farm merge checks (core/api/farm.h): pieces of one image agree on all of these but crop and split.
+    img.metadata["specula:frame"] = std::to_string(rs.frame);
+    img.metadata["specula:frame_size"] = std::to_string(rs.width) + "x" + std::to_string(rs.height);
+    img.metadata["specula:crop"] = std::to_string(crop.x0) + "," + std::to_string(crop.y0) + "," + std::to_string(crop.x1) +
+                                   "," + std::to_string(crop.y1);
+    img.metadata["specula:sample_block"] = std::to_string(block);
+    if (splitPiece)
+        img.metadata["specula:sample_split"] = std::to_string(rs.sampleSplitIndex) + "/" + std::to_string(rs.sampleSplitCount);
+    if (!scene.sourceHash.empty()) img.metadata["specula:scene_hash"] = scene.sourceHash;
     img.metadata["specula:version"] = SPECULA_VERSION;
     // For compositing (OpenEXR's worldToCamera and worldToNDC): NDC spans the written image, so a crop window's NDC
     // is the full frame's rescaled to the crop.

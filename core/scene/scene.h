@@ -61,6 +61,14 @@ struct RenderSettings {
     // spot or directional light, a cube of six per point light; core/render/shadow_maps.h).
     int shadowMapSize = 1024;
     std::optional<CropWindow> crop;
+    // "sample_block": the film sums each pixel's samples in blocks of this many consecutive sample indices and adds the
+    // block sums in order (0: one block of spp). A render split into spp/sample_block pieces of one block each
+    // (sampleSplitIndex/Count, `render --sample-split`) is merged bit for bit into this render (docs/farm.md).
+    int sampleBlock = 0;
+    // Render only block sampleSplitIndex of sampleSplitCount (blocks of spp/sampleSplitCount samples); the images then
+    // hold the block's sums, not averages, with the valid-sample count as AOV "samples" (a farm piece).
+    int sampleSplitIndex = 0, sampleSplitCount = 0;
+    int frame = 0;  // the animation frame this scene was evaluated at (scene "animation"; 0 without one)
 };
 
 struct ColorSettings {
@@ -84,6 +92,9 @@ struct ShapeInstance {
 
 struct Scene {
     std::string sourcePath;  // the JSON file, for messages
+    // FNV-1a 64 (hex) of the scene text and the settings that change pixels (all but the crop window and the sample
+    // split): farm pieces of one image carry the same hash, and `specula merge` refuses pieces that differ.
+    std::string sourceHash;
     std::vector<std::string> warnings;  // non-fatal findings of the loader ("<JSON pointer>: <message>")
     RenderSettings render;
     ColorSettings color;

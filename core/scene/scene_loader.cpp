@@ -1,6 +1,7 @@
 // Scene format v1 loader: strict JSON -> Scene (render settings, camera, textures, materials, shapes,
 // lights), with every input error reported at its JSON pointer.
 #include "core/scene/scene_loader.h"
+#include "core/scene/animation.h"
 
 #include "core/color/color_config.h"
 #include "core/geometry/mesh_io.h"
@@ -59,13 +60,14 @@ void readRender(const Json& j, Scene& s) {
     JsonReader r(j, "/render",
                  {"width", "height", "spp", "seed", "tile", "integrator", "max_depth", "filter", "gaussian_sigma2",
                   "pixel_center", "clamp_indirect", "derivatives", "area_lights", "mesh_lights", "ltc_horizon", "ltc_max_depth", "ltc_shadow_rays",
-                  "shadow_map_size"});
+                  "shadow_map_size", "sample_block"});
     RenderSettings& rs = s.render;
     rs.width = r.integer("width", rs.width, 1, kMaxDimension);
     rs.height = r.integer("height", rs.height, 1, kMaxDimension);
     rs.spp = r.integer("spp", rs.spp, 1, 1 << 20);
     rs.seed = uint64_t(r.integer("seed", 0, 0, 2147483647));
     rs.tile = r.integer("tile", rs.tile, 1, 1024);
+    rs.sampleBlock = r.integer("sample_block", rs.sampleBlock, 0, 1 << 20);
     {
         const std::string integrator = r.enumeration("integrator", "path", {"path", "direct", "raster"});
         rs.integrator = integrator == "path"     ? IntegratorKind::Path
@@ -513,7 +515,9 @@ Scene loadSceneFromString(const std::string& text, const std::string& baseDir, c
                           const std::string& name) {
     const SceneLimits& limits = ov.limits;
     Json root = parseJson(text, name, limits.maxJsonDepth);
-    JsonReader top(root, "", {"version", "render", "color", "camera", "materials", "shapes", "lights", "$schema", "description"});
+    const AnimationRange animation = applyAnimation(root, ov.frame);
+    JsonReader top(root, "", {"version", "render", "color", "camera", "materials", "shapes", "lights", "$schema", "description",
+                              "animation"});
     if (top.has("version")) {
         int v = top.integer("version", 1, 0, 1000000);
         if (v != 1) top.fail("version", "unsupported scene version " + std::to_string(v) + "; this build reads version 1");
@@ -531,6 +535,21 @@ Scene loadSceneFromString(const std::string& text, const std::string& baseDir, c
     if (ov.width > 0) scene.render.width = ov.width;
     if (ov.height > 0) scene.render.height = ov.height;
     if (ov.seed >= 0) scene.render.seed = uint64_t(ov.seed);
+    if (ov.sampleBlock >= 0) scene.render.sampleBlock = ov.sampleBlock;
+    scene.render.frame = animation.frame;
+    if (ov.sampleSplitCount > 0) {
+        const int k = ov.sampleSplitCount, i = ov.sampleSplitIndex, spp = scene.render.spp;
+        if (k < 2 || i < 0 || i >= k || spp % k != 0)
+            throw InputError("/render/spp", "a sample split " + std::to_string(i) + "/" + std::to_string(k) +
+                                                " needs 0 <= index < count, count >= 2 and a count that divides spp (" +
+                                                std::to_string(spp) + ")");
+        if (scene.render.sampleBlock > 0 && scene.render.sampleBlock != spp / k)
+            throw InputError("/render/sample_block", "sample_block " + std::to_string(scene.render.sampleBlock) +
+                                                         " differs from the split's block of " + std::to_string(spp / k) + " samples");
+        scene.render.sampleBlock = spp / k;
+        scene.render.sampleSplitIndex = i;
+        scene.render.sampleSplitCount = k;
+    }
     if (int64_t(scene.render.width) * scene.render.height > std::min(limits.maxPixels, kMaxPixels))
         throw InputError("/render/width", "a " + std::to_string(scene.render.width) + "x" + std::to_string(scene.render.height) +
                                               " image exceeds the limit of " + std::to_string(std::min(limits.maxPixels, kMaxPixels)) + " pixels");
@@ -550,6 +569,21 @@ Scene loadSceneFromString(const std::string& text, const std::string& baseDir, c
         scene.render.spp = 1;
         scene.render.pixelCenter = true;
         scene.render.derivatives = DerivativeMode::Quad;
+    }
+    {
+        // The hash the farm's merge compares (Scene::sourceHash): the text and every setting that changes pixels.
+        const RenderSettings& rs = scene.render;
+        const int block = rs.sampleBlock > 0 ? std::min(rs.sampleBlock, rs.spp) : rs.spp;
+        const std::string settings = "\nspp=" + std::to_string(rs.spp) + ";seed=" + std::to_string(rs.seed) + ";size=" +
+                                     std::to_string(rs.width) + "x" + std::to_string(rs.height) + ";integrator=" +
+                                     std::to_string(int(rs.integrator)) + ";area_lights=" + std::to_string(int(rs.areaLights)) +
+                                     ";sample_block=" + std::to_string(block) + ";frame=" + std::to_string(rs.frame);
+        uint64_t h = 1469598103934665603ull;
+        for (const std::string* part : {&text, &settings})
+            for (unsigned char c : *part) h = (h ^ c) * 1099511628211ull;
+        char hex[17];
+        std::snprintf(hex, sizeof hex, "%016llx", (unsigned long long)h);
+        scene.sourceHash = hex;
     }
     if (scene.render.pixelCenter && scene.render.spp != 1)
         throw InputError("/render/pixel_center", "pixel_center sampling needs spp = 1 (got " + std::to_string(scene.render.spp) + ")");

@@ -33,6 +33,10 @@ struct SceneOverrides {
     std::optional<AreaLightMode> areaLights;  // render.area_lights
     std::optional<IntegratorKind> integrator; // render.integrator
     SceneLimits limits;
+    std::optional<int> frame;  // the animation frame (default: the scene's frame_start)
+    int sampleBlock = -1;      // render.sample_block (-1 = keep)
+    // A farm piece: sample block sampleSplitIndex of sampleSplitCount (count 0 = the whole render).
+    int sampleSplitIndex = 0, sampleSplitCount = 0;
 };
 
 // Parses and builds a scene from a file. Relative paths in the scene resolve against its folder.

@@ -4,6 +4,7 @@
 #include "core/util/error.h"
 #include "core/util/memory_budget.h"
 #include "plugin/cli/cli_output.h"
+#include "plugin/cli/farm_command.h"
 #include "plugin/cli/graph_commands.h"
 #include "plugin/cli/normalmap_command.h"
 #include "plugin/cli/nodes_command.h"
@@ -107,6 +108,15 @@ int main(int argc, char** argv) {
     render->add_option("--seed", seed, "Sampler seed (overrides the scene)")->check(CLI::Range(int64_t(0), int64_t(2147483647)));
     render->add_option("--resolution", resolution, "Image size WxH (overrides the scene)");
     render->add_option("--crop", crop, "Render only pixels x0,y0,x1,y1 (x1,y1 exclusive); output is the crop");
+    int frame = 0, sampleBlock = -1;
+    bool frameGiven = false;
+    std::string sampleSplit;
+    render->add_option("--frame", frame, "Animation frame to render (default: the scene's frame_start)")
+        ->check(CLI::Range(-1000000, 1000000))
+        ->each([&](const std::string&) { frameGiven = true; });
+    render->add_option("--sample-block", sampleBlock, "Sum samples in blocks of N (render.sample_block; farm splits)")
+        ->check(CLI::Range(0, 1 << 20));
+    render->add_option("--sample-split", sampleSplit, "Render only sample block I of K (I/K), keeping sums: a farm piece");
     std::string areaLights;
     render->add_option("--area-lights", areaLights, "Quad lights: ltc (analytic where lobes can) or sampled (overrides render.area_lights)")
         ->check(CLI::IsMember({"ltc", "sampled"}));
@@ -153,6 +163,17 @@ int main(int argc, char** argv) {
                 return;
             }
             ov.crop = c;
+        }
+        if (frameGiven) ov.frame = frame;
+        ov.sampleBlock = sampleBlock;
+        if (!sampleSplit.empty()) {
+            char slash = 0, extra = 0;
+            if (std::sscanf(sampleSplit.c_str(), "%d%c%d%c", &ov.sampleSplitIndex, &slash, &ov.sampleSplitCount, &extra) != 3 ||
+                slash != '/') {
+                std::fprintf(stderr, "specula: error: --sample-split expects I/K, got '%s'\n", sampleSplit.c_str());
+                exitCode = kExitUsage;
+                return;
+            }
         }
         if (outPath.empty()) outPath = fs::path(scenePath).stem().string() + ".exr";
         try {
@@ -296,6 +317,7 @@ int main(int argc, char** argv) {
     addPreviewCommand(app, exitCode);
     addViewCommand(app, exitCode);
     addNodesCommand(app, exitCode);
+    addFarmCommands(app, exitCode);  // merge, farm (plugin/cli/farm_command.cpp)
 
     // A first word that is neither an option nor a command: name it and the nearest command (CLI11 only says "A
     // subcommand is required").
