@@ -333,6 +333,13 @@ ImageSet readImageSet(const std::string& path) {
             continue;  // parts of another size cannot live in one ImageSet
         }
         if (spec.depth > 1) throw ImageIoError("cannot read '" + path + "': volume images are not supported");
+        // The header decides the allocation, so it is bounded first: no image this program writes or compares is larger
+        // than the renderer's 2^26 pixels, and none has more than 1024 channels.
+        if (spec.width < 1 || spec.height < 1 || int64_t(spec.width) * spec.height > (int64_t(1) << 26) || spec.nchannels < 1 ||
+            spec.nchannels > 1024)
+            throw ImageIoError("cannot read '" + path + "': its header declares " + std::to_string(spec.width) + "x" +
+                               std::to_string(spec.height) + " pixels of " + std::to_string(spec.nchannels) +
+                               " channels, beyond the limit of 2^26 pixels and 1024 channels");
         std::string partName = sub > 0 ? std::string(spec.get_string_attribute("name")) : std::string();
         buffers.emplace_back(size_t(spec.width) * size_t(spec.height) * size_t(spec.nchannels));
         if (!in->read_image(sub, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, buffers.back().data()))

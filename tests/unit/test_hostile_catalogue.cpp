@@ -29,6 +29,7 @@ const json& catalogue() {
 }
 
 // The bytes of a file entry: a string as it is, {"hex": ...}, or {"base": "small", "set": {...}, "remove": [...]}.
+// A case may list "before" commands (run in the folder first, each must exit 0), e.g. renders of farm pieces.
 std::string contentOf(const json& f) {
     if (f.is_string()) return f.get<std::string>();
     if (f.contains("hex")) {
@@ -93,6 +94,13 @@ TEST_P(HostileInput, OneClearErrorAndNothingWritten) {
         test::writeFile(p.string(), contentOf(it.value()));
         before[it.key()] = test::readFile(p.string());
     }
+    // Commands that set the case up (render the pieces a merge case refuses); each must succeed.
+    for (const auto& prep : c.value("before", json::array())) {
+        const Outcome p = run(dir, prep.get<std::string>(), 0, 0);
+        ASSERT_EQ(p.exit, 0) << prep << ":\n" << p.output;
+    }
+    for (const auto& u : c.value("unchanged", json::array()))
+        if (fs::exists(fs::path(dir) / u.get<std::string>())) before[u.get<std::string>()] = test::readFile((fs::path(dir) / u.get<std::string>()).string());
     int sig = 0;
     if (c.contains("signal")) sig = c["signal"] == "INT" ? SIGINT : SIGTERM;
     const Outcome o = run(dir, c["command"], sig, c.value("signal_after_ms", 0));
