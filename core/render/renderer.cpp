@@ -40,6 +40,18 @@ struct Accum {
     Vec2 uv{0.f};
     double depth = 0;
     int n = 0;
+    // Adds one sample (count 1) or a block's sums (its count), field by field.
+    template <class Sums>
+    void add(const Sums& v, double depthSum, int count) {
+        beauty += v.beauty;
+        diffuse += v.diffuse;
+        specular += v.specular;
+        albedo += v.albedo;
+        normal += v.normal;
+        uv += v.uv;
+        depth += depthSum;
+        n += count;
+    }
 };
 
 // Adds a block's sums to the pixel's (the first block is assigned, so that a render of one block is the plain sum).
@@ -52,14 +64,7 @@ void foldBlock(Accum& total, const Accum& block, bool first, bool severalBlocks)
         total.depth = depth;
         return;
     }
-    total.beauty += block.beauty;
-    total.diffuse += block.diffuse;
-    total.specular += block.specular;
-    total.albedo += block.albedo;
-    total.normal += block.normal;
-    total.uv += block.uv;
-    total.depth += depth;
-    total.n += block.n;
+    total.add(block, depth, block.n);
 }
 
 bool finiteSample(const SampleValue& v) {
@@ -183,14 +188,7 @@ RenderOutput renderScene(const Scene& scene, const RenderOptions& options) {
                         ++tileInvalid;
                         continue;
                     }
-                    blockAcc.beauty += v.beauty;
-                    blockAcc.diffuse += v.diffuse;
-                    blockAcc.specular += v.specular;
-                    blockAcc.albedo += v.albedo;
-                    blockAcc.normal += v.normal;
-                    blockAcc.uv += v.uv;
-                    blockAcc.depth += v.depth;
-                    ++blockAcc.n;
+                    blockAcc.add(v, v.depth, 1);
                 }
                 foldBlock(acc, blockAcc, firstBlock, severalBlocks);
                 const size_t pix = size_t(y - crop.y0) * W + (x - crop.x0);
