@@ -89,6 +89,7 @@ SceneOverrides overridesOf(const LoadOptions& o) {
     ov.width = o.width;
     ov.height = o.height;
     if (o.cropX0 || o.cropY0 || o.cropX1 || o.cropY1) ov.crop = CropWindow{o.cropX0, o.cropY0, o.cropX1, o.cropY1};
+    if (o.hasFrame) ov.frame = o.frame;
     SceneLimits& l = ov.limits;  // starts at the built-in maxima; a positive option can only lower one
     if (o.maxPixels > 0) l.maxPixels = std::min(l.maxPixels, o.maxPixels);
     if (o.maxTriangles > 0) l.maxTriangles = std::min(l.maxTriangles, o.maxTriangles);

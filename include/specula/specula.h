@@ -67,6 +67,10 @@ struct LoadOptions {
     int64_t seed = -1;                                   // <0: the scene's
     int width = 0, height = 0;                           // 0: the scene's
     int cropX0 = 0, cropY0 = 0, cropX1 = 0, cropY1 = 0;  // all 0: the whole frame
+    // The animation frame (the scene's "animation" block, docs/scene-format.md#animation; `specula render --frame`);
+    // hasFrame false: the scene's frame_start. A frame outside the range fails with Error bad_input.
+    bool hasFrame = false;
+    int frame = 0;
     // A host's caps on what the scene may ask for (docs/reliability.md "Limits"); 0: the built-in maximum, and no cap
     // can exceed it. Beyond a cap the load fails with Error bad_input at the JSON pointer of what exceeds it.
     int64_t maxPixels = 0, maxTriangles = 0;

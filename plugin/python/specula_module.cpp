@@ -60,8 +60,9 @@ struct PyResult {
 
 sp::LoadOptions loadOptionsOf(std::optional<int> spp, std::optional<int64_t> seed, std::optional<int> width,
                               std::optional<int> height, std::optional<std::vector<int>> crop,
-                              std::optional<std::map<std::string, int64_t>> limits) {
+                              std::optional<std::map<std::string, int64_t>> limits, std::optional<int> frame) {
     sp::LoadOptions o;
+    if (frame) o.hasFrame = true, o.frame = *frame;
     if (limits)  // the CLI's --limit names (LoadOptions::setLimit): a bad one raises UsageError naming the nearest
         for (const auto& [name, value] : *limits) o.setLimit(name, value);
     if (spp) {
@@ -314,8 +315,8 @@ class IoError(Error):
             "from_file",
             [](const std::string& path, std::optional<int> spp, std::optional<int64_t> seed, std::optional<int> width,
                std::optional<int> height, std::optional<std::vector<int>> crop,
-               std::optional<std::map<std::string, int64_t>> limits) {
-                sp::LoadOptions o = loadOptionsOf(spp, seed, width, height, crop, limits);
+               std::optional<std::map<std::string, int64_t>> limits, std::optional<int> frame) {
+                sp::LoadOptions o = loadOptionsOf(spp, seed, width, height, crop, limits, frame);
                 auto s = std::make_unique<PyScene>();
                 py::gil_scoped_release nogil;
                 s->scene = sp::Scene::fromFile(path, o);
@@ -323,34 +324,35 @@ class IoError(Error):
             },
             py::arg("path"), py::kw_only(), py::arg("spp") = py::none(), py::arg("seed") = py::none(),
             py::arg("width") = py::none(), py::arg("height") = py::none(), py::arg("crop") = py::none(),
-            py::arg("limits") = py::none(),
+            py::arg("limits") = py::none(), py::arg("frame") = py::none(),
             "Loads a scene file (docs/graph-format.md). spp, seed, width, height and crop=(x0, y0, x1, y1) override\n"
             "the file (and keep overriding it across set()). limits={'pixels': N, 'spp': N, ...} caps what the scene\n"
-            "may ask for (the names of `specula render --limit`). A missing file raises IoError, an invalid scene or\n"
+            "may ask for (the names of `specula render --limit`). frame=N evaluates the scene's animation at frame N\n"
+            "(`specula render --frame`; default frame_start). A missing file raises IoError, an invalid scene or\n"
             "one beyond a cap BadInputError with the JSON pointer of the bad value.")
         .def_static(
             "from_dict",
             [](py::object d, const std::string& baseDir, std::optional<int> spp, std::optional<int64_t> seed,
                std::optional<int> width, std::optional<int> height, std::optional<std::vector<int>> crop,
-               std::optional<std::map<std::string, int64_t>> limits) {
+               std::optional<std::map<std::string, int64_t>> limits, std::optional<int> frame) {
                 std::string text = jsonModule().attr("dumps")(d).cast<std::string>();
-                return loadString(text, baseDir, loadOptionsOf(spp, seed, width, height, crop, limits), "<dict>");
+                return loadString(text, baseDir, loadOptionsOf(spp, seed, width, height, crop, limits, frame), "<dict>");
             },
             py::arg("scene"), py::arg("base_dir") = ".", py::kw_only(), py::arg("spp") = py::none(),
             py::arg("seed") = py::none(), py::arg("width") = py::none(), py::arg("height") = py::none(),
-            py::arg("crop") = py::none(), py::arg("limits") = py::none(),
+            py::arg("crop") = py::none(), py::arg("limits") = py::none(), py::arg("frame") = py::none(),
             "Loads a scene from a dict of the scene format (serialised with json.dumps); base_dir resolves relative\n"
             "paths (textures, meshes). Overrides as for from_file.")
         .def_static(
             "from_json",
             [](const std::string& text, const std::string& baseDir, std::optional<int> spp, std::optional<int64_t> seed,
                std::optional<int> width, std::optional<int> height, std::optional<std::vector<int>> crop,
-               std::optional<std::map<std::string, int64_t>> limits) {
-                return loadString(text, baseDir, loadOptionsOf(spp, seed, width, height, crop, limits), "<string>");
+               std::optional<std::map<std::string, int64_t>> limits, std::optional<int> frame) {
+                return loadString(text, baseDir, loadOptionsOf(spp, seed, width, height, crop, limits, frame), "<string>");
             },
             py::arg("text"), py::arg("base_dir") = ".", py::kw_only(), py::arg("spp") = py::none(),
             py::arg("seed") = py::none(), py::arg("width") = py::none(), py::arg("height") = py::none(),
-            py::arg("crop") = py::none(), py::arg("limits") = py::none(), "Loads a scene from JSON text; as from_dict.")
+            py::arg("crop") = py::none(), py::arg("limits") = py::none(), py::arg("frame") = py::none(), "Loads a scene from JSON text; as from_dict.")
         .def(
             "set",
             [](PyScene& self, const std::string& pointer, py::object value) {

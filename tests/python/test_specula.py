@@ -86,6 +86,21 @@ def test_load_overrides():
     assert r["beauty"].shape == (12, 16, 3) and r.stats.samples == 16 * 12 * 2
 
 
+def test_load_frame_of_an_animation():
+    # frame=N evaluates the scene's animation block (docs/scene-format.md#animation), as `specula render --frame N`.
+    animated = copy.deepcopy(SCENE)
+    animated["animation"] = {"frame_start": 1, "frame_end": 3, "tracks": [
+        {"target": "/camera/position", "keys": [{"frame": 1, "value": [0, -4, 1]}, {"frame": 3, "value": [1, -4, 1]}]}]}
+    first = specula.Scene.from_dict(animated).render()["beauty"]
+    assert np.array_equal(specula.Scene.from_dict(animated, frame=1).render()["beauty"], first)
+    # Frame 1 is the unanimated scene's camera; frame 3 moved it.
+    assert np.array_equal(scene().render()["beauty"], first)
+    assert not np.array_equal(specula.Scene.from_dict(animated, frame=3).render()["beauty"], first)
+    with pytest.raises(specula.BadInputError) as e:
+        specula.Scene.from_dict(animated, frame=9)
+    assert e.value.pointer == "/animation/frame_end"
+
+
 def test_load_limits():
     # The CLI's --limit names: a cap below the scene's spp is bad input at its pointer; an unknown name or a cap above
     # the built-in maximum is a usage error naming the nearest name.
