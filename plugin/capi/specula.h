@@ -23,7 +23,7 @@ extern "C" {
  * meaning or layout; the minor when something is added. A host built against ABI M.m works with a library
  * of the same M and a minor >= m (spc_abi_compatible). */
 #define SPC_ABI_VERSION_MAJOR 1
-#define SPC_ABI_VERSION_MINOR 1
+#define SPC_ABI_VERSION_MINOR 2
 #define SPC_ABI_VERSION ((uint32_t)((SPC_ABI_VERSION_MAJOR << 16) | SPC_ABI_VERSION_MINOR))
 
 /* The library's ABI version, (major << 16) | minor. */
@@ -89,8 +89,11 @@ typedef struct spc_load_options {
      * smaller size and gets the built-in maxima. */
     int64_t max_pixels, max_triangles;
     int32_t max_spp, max_texture_side, max_graph_nodes, max_json_depth;
+    /* Since ABI 1.2: has_frame != 0 renders animation frame 'frame' (the scene's "animation" block, as `specula
+     * render --frame`; docs/scene-format.md); 0: the scene's frame_start. A frame outside the range: SPC_BAD_INPUT. */
+    int32_t has_frame, frame;
 } spc_load_options;
-#define SPC_LOAD_OPTIONS_INIT {(uint32_t)sizeof(spc_load_options), 0, -1, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0}
+#define SPC_LOAD_OPTIONS_INIT {(uint32_t)sizeof(spc_load_options), 0, -1, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0}
 
 /* Loads a scene file (relative paths inside resolve against its folder); opts may be NULL. */
 SPC_API spc_status spc_scene_load_file(spc_context* ctx, const char* path, const spc_load_options* opts, spc_scene** out);

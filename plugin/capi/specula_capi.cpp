@@ -126,16 +126,19 @@ char* dupString(const std::string& s) {
 sp::LoadOptions loadOptionsOf(const spc_load_options* o) {
     sp::LoadOptions lo;
     if (!o) return lo;
-    // ABI 1.0's struct ends at the crop window; the limits were appended in 1.1 and are read only when 'size' has them.
-    constexpr size_t kSize10 = offsetof(spc_load_options, max_pixels);
-    if (o->size < kSize10 || o->size > sizeof(spc_load_options))
+    // ABI 1.0's struct ends at the crop window; the limits were appended in 1.1, the frame in 1.2: each is read only
+    // when 'size' has it.
+    constexpr size_t kSize10 = offsetof(spc_load_options, max_pixels), kSize11 = offsetof(spc_load_options, has_frame);
+    if ((o->size != kSize10 && o->size != kSize11 && o->size != sizeof(spc_load_options)))
         usage("spc_load_options.size is " + std::to_string(o->size) + ", expected " + std::to_string(sizeof(spc_load_options)) +
-              " (or " + std::to_string(kSize10) + " from an ABI 1.0 host): initialise it with SPC_LOAD_OPTIONS_INIT");
+              " (or " + std::to_string(kSize11) + " / " + std::to_string(kSize10) +
+              " from an ABI 1.1 / 1.0 host): initialise it with SPC_LOAD_OPTIONS_INIT");
     lo.spp = o->spp;
     lo.seed = o->seed;
     lo.width = o->width, lo.height = o->height;
     lo.cropX0 = o->crop_x0, lo.cropY0 = o->crop_y0, lo.cropX1 = o->crop_x1, lo.cropY1 = o->crop_y1;
-    if (o->size < sizeof(spc_load_options)) return lo;
+    if (o->size == sizeof(spc_load_options) && o->has_frame) lo.hasFrame = true, lo.frame = o->frame;
+    if (o->size < kSize11) return lo;
     const std::pair<const char*, int64_t> limits[] = {
         {"pixels", o->max_pixels},           {"triangles", o->max_triangles},     {"spp", o->max_spp},
         {"texture_side", o->max_texture_side}, {"graph_nodes", o->max_graph_nodes}, {"json_depth", o->max_json_depth}};

@@ -358,7 +358,18 @@ int main(int argc, char** argv) {
             OK(ctx, A.spc_scene_load_string(ctx, kScene, "", &lo, &small));
             A.spc_scene_destroy(small);
             small = NULL;
-            printf("load options: resolution, spp, crop and limits applied\n");
+            /* ABI 1.2 frame: a frame of a scene without an animation block is bad input; a 1.1-sized struct (no frame)
+             * still loads. */
+            lo = (spc_load_options)SPC_LOAD_OPTIONS_INIT;
+            lo.has_frame = 1, lo.frame = 5;
+            expectError(ctx, A.spc_scene_load_string(ctx, kScene, "", &lo, &small), SPC_BAD_INPUT, "--frame",
+                        "frame 5 of a scene without an animation");
+            CHECK(small == NULL);
+            lo.size = (uint32_t)offsetof(spc_load_options, has_frame);
+            OK(ctx, A.spc_scene_load_string(ctx, kScene, "", &lo, &small));
+            A.spc_scene_destroy(small);
+            small = NULL;
+            printf("load options: resolution, spp, crop, limits and frame applied\n");
         }
     }
 
