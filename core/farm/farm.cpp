@@ -274,6 +274,13 @@ std::string trim(std::string s) {
     return s;
 }
 
+// The last line of a command's output: sbatch ends with the line that says why it failed.
+std::string lastLine(const std::string& out) {
+    const std::string t = trim(out);
+    const size_t nl = t.rfind('\n');
+    return nl == std::string::npos ? t : t.substr(nl + 1);
+}
+
 Json loadPlan(const std::string& dir) {
     const std::string path = (fs::path(dir) / "plan.json").string();
     std::error_code ec;
@@ -308,12 +315,17 @@ std::vector<std::string> submitJobs(const Json& plan, const std::vector<int>& ta
         return {};
     }
     std::string out;
-    if (runCommand(renderCmd, out) != 0) throw IoError("sbatch failed: " + trim(out));
+    if (runCommand(renderCmd, out) != 0) throw IoError("sbatch failed: " + lastLine(out));
     const std::string renderJob = trim(out).substr(0, trim(out).find(';'));
     const std::string finishCmd =
         "sbatch --parsable --dependency=afterany:" + renderJob + " " + shellQuote((dir / "finish.sbatch").string());
     commands.push_back(finishCmd);
-    if (runCommand(finishCmd, out) != 0) throw IoError("sbatch (finish job) failed: " + trim(out));
+    if (runCommand(finishCmd, out) != 0) {
+        std::ofstream jobs(dir / "jobs.txt", std::ios::app);
+        jobs << renderJob << " render " << array << "\n";
+        throw IoError("sbatch (finish job) failed: " + lastLine(out) + "; the render job " + renderJob +
+                      " is queued: run `specula farm finish " + dir.string() + "` when it ends");
+    }
     const std::string finishJob = trim(out).substr(0, trim(out).find(';'));
     std::ofstream jobs(dir / "jobs.txt", std::ios::app);
     jobs << renderJob << " render " << array << "\n" << finishJob << " finish\n";
@@ -425,7 +437,15 @@ SubmitResult submit(const SubmitOptions& o) {
         return r;
     }
     writeText((dir / "plan.json").string(), plan.dump(1));
-    r.jobIds = submitJobs(plan, all, r.commands, false);
+    try {
+        r.jobIds = submitJobs(plan, all, r.commands, false);
+    } catch (const IoError&) {
+        // Nothing was queued when the array itself was refused: take the plan back, so that the same command can be
+        // run again (a plan left behind would make the folder look like a running farm).
+        std::ifstream jobs(dir / "jobs.txt");
+        if (!jobs) fs::remove(dir / "plan.json", ec);
+        throw;
+    }
     return r;
 }
 
