@@ -84,6 +84,39 @@ void BM_GgxDirect(benchmark::State& state) {
     }
 }
 
+// The two halves apart: building the closure (the graph's shade against the hand-written lobe set-up), without eval.
+void BM_ShadeOnly(benchmark::State& state) {
+    Setup& s = setup();
+    ScratchArena arena;
+    Closure cl;
+    ShadingPoint sp = point();
+    for (auto _ : state) {
+        s.mat->shade(sp, arena, cl);
+        benchmark::DoNotOptimize(cl);
+        arena.reset();
+    }
+}
+void BM_BuildOnly(benchmark::State& state) {
+    ScratchArena arena;
+    Closure cl;
+    ShadingPoint sp = point();
+    float roughness = 0.3f, anisotropy = 0.4f;
+    Color3 f0(0.95f, 0.64f, 0.54f);
+    for (auto _ : state) {
+        benchmark::DoNotOptimize(sp);
+        benchmark::DoNotOptimize(roughness);
+        benchmark::DoNotOptimize(anisotropy);
+        float alpha = roughness * roughness, aspect = std::sqrt(std::max(1.f - 0.9f * anisotropy, 0.f));
+        Vec3 n = glm::normalize(sp.n);
+        Frame frame = Frame::fromNormalTangent(n, Vec3(sp.tangent));
+        cl.clear();
+        cl.add(Color3(1.f), arena.make<GgxLobe>(alpha / aspect, alpha * aspect, Fresnel::schlick(f0)), frame);
+        benchmark::DoNotOptimize(cl);
+        arena.reset();
+    }
+}
+BENCHMARK(BM_ShadeOnly)->Repetitions(3)->ReportAggregatesOnly(true);
+BENCHMARK(BM_BuildOnly)->Repetitions(3)->ReportAggregatesOnly(true);
 BENCHMARK(BM_GgxDirect)->Repetitions(5)->ReportAggregatesOnly(true);
 BENCHMARK(BM_GgxGraph)->Repetitions(5)->ReportAggregatesOnly(true);
 
@@ -94,6 +127,9 @@ int main(int argc, char** argv) {
     benchmark::Initialize(&argc, argv);
     specula::bench::RatioReporter rep;
     benchmark::RunSpecifiedBenchmarks(&rep);
+    if (rep.medianNs.count("BM_ShadeOnly") && rep.medianNs.count("BM_BuildOnly"))
+        std::printf("closure building alone: graph shade %.2f ns / hand-written %.2f ns = ratio %.3f\n", rep.medianNs["BM_ShadeOnly"],
+                    rep.medianNs["BM_BuildOnly"], rep.medianNs["BM_ShadeOnly"] / rep.medianNs["BM_BuildOnly"]);
     if (rep.medianNs.count("BM_GgxGraph") && rep.medianNs.count("BM_GgxDirect")) {
         double g = rep.medianNs["BM_GgxGraph"], d = rep.medianNs["BM_GgxDirect"];
         std::printf("graph/direct GGX (shade+eval) median: %.2f ns / %.2f ns = ratio %.3f (overhead %+.1f%%, target <= +10%%)\n", g, d,
