@@ -59,17 +59,11 @@ void BM_GgxGraph(benchmark::State& state) {
     }
 }
 
-void BM_GgxDirect(benchmark::State& state) {
-    Setup& s = setup();
-    ScratchArena arena;
-    Closure cl;
-    ShadingPoint sp = point();
-    // A hand-written material stores roughness/anisotropy/F0 and maps them per shading point, as the node does.
+// A hand-written material stores roughness/anisotropy/F0 and maps them per shading point, as the node does.
+struct HandWritten {
     float roughness = 0.3f, anisotropy = 0.4f;
-    Color3 f0(0.95f, 0.64f, 0.54f);
-    size_t k = 0;
-    for (auto _ : state) {
-        benchmark::DoNotOptimize(sp);
+    Color3 f0{0.95f, 0.64f, 0.54f};
+    void build(const ShadingPoint& sp, ScratchArena& arena, Closure& cl) {
         benchmark::DoNotOptimize(roughness);
         benchmark::DoNotOptimize(anisotropy);
         float alpha = roughness * roughness, aspect = std::sqrt(std::max(1.f - 0.9f * anisotropy, 0.f));
@@ -77,6 +71,19 @@ void BM_GgxDirect(benchmark::State& state) {
         Frame frame = Frame::fromNormalTangent(n, Vec3(sp.tangent));
         cl.clear();
         cl.add(Color3(1.f), arena.make<GgxLobe>(alpha / aspect, alpha * aspect, Fresnel::schlick(f0)), frame);
+    }
+};
+
+void BM_GgxDirect(benchmark::State& state) {
+    Setup& s = setup();
+    ScratchArena arena;
+    Closure cl;
+    ShadingPoint sp = point();
+    HandWritten m;
+    size_t k = 0;
+    for (auto _ : state) {
+        benchmark::DoNotOptimize(sp);
+        m.build(sp, arena, cl);
         BsdfEval e = cl.evalPdf({s.dirs[k & 63], s.dirs[(k * 7 + 3) & 63]}).f;
         benchmark::DoNotOptimize(e);
         arena.reset();
@@ -100,17 +107,10 @@ void BM_BuildOnly(benchmark::State& state) {
     ScratchArena arena;
     Closure cl;
     ShadingPoint sp = point();
-    float roughness = 0.3f, anisotropy = 0.4f;
-    Color3 f0(0.95f, 0.64f, 0.54f);
+    HandWritten m;
     for (auto _ : state) {
         benchmark::DoNotOptimize(sp);
-        benchmark::DoNotOptimize(roughness);
-        benchmark::DoNotOptimize(anisotropy);
-        float alpha = roughness * roughness, aspect = std::sqrt(std::max(1.f - 0.9f * anisotropy, 0.f));
-        Vec3 n = glm::normalize(sp.n);
-        Frame frame = Frame::fromNormalTangent(n, Vec3(sp.tangent));
-        cl.clear();
-        cl.add(Color3(1.f), arena.make<GgxLobe>(alpha / aspect, alpha * aspect, Fresnel::schlick(f0)), frame);
+        m.build(sp, arena, cl);
         benchmark::DoNotOptimize(cl);
         arena.reset();
     }

@@ -183,38 +183,37 @@ MergeSummary mergePieces(const std::vector<std::string>& paths, const std::strin
     for (auto& [key, list] : tiles) {
         const int x0 = key[1], y0 = key[0], w = key[3] - key[1], h = key[2] - key[0];
         const bool summed = list[0]->splitIndex >= 0;
+        // Each piece's buffers looked up once per tile, not per pixel.
+        std::vector<const float*> counts;
+        for (const Piece* p : list) counts.push_back(summed ? p->images.find("samples")->pixels.data() : nullptr);
         for (AovBuffer& o : out.aovs) {
             const int ch = o.channels();
             const bool depth = o.name == "depth";
+            std::vector<const float*> src;
+            for (const Piece* p : list) src.push_back(p->images.find(o.name)->pixels.data());
             for (int y = 0; y < h; ++y)
                 for (int x = 0; x < w; ++x) {
-                    const size_t src = size_t(y) * w + x, dst = size_t(y + y0) * sum.width + (x + x0);
+                    const size_t px = size_t(y) * w + x, dst = size_t(y + y0) * sum.width + (x + x0);
                     if (!summed) {
-                        const AovBuffer* b = list[0]->images.find(o.name);
-                        for (int c = 0; c < ch; ++c) o.pixels[dst * ch + c] = b->pixels[src * ch + c];
+                        for (int c = 0; c < ch; ++c) o.pixels[dst * ch + c] = src[0][px * ch + c];
                         continue;
                     }
                     // The film's sums (core/render/renderer.cpp foldBlock): floats added in split order, depth in
                     // double; then value = sum * (1 / n) with the total count n.
                     int n = 0;
-                    for (const Piece* p : list) n += int(p->images.find("samples")->pixels[src]);
+                    for (const float* cnt : counts) n += int(cnt[px]);
                     if (n == 0) continue;
                     const float inv = 1.f / float(n);
                     for (int c = 0; c < ch; ++c) {
+                        const size_t k = px * ch + c;
                         if (depth) {
-                            double d = 0;
-                            for (size_t i = 0; i < list.size(); ++i) {
-                                const double v = double(list[i]->images.find(o.name)->pixels[src * ch + c]);
-                                d = i == 0 ? v : d + v;
-                            }
+                            double d = double(src[0][k]);
+                            for (size_t i = 1; i < src.size(); ++i) d += double(src[i][k]);
                             o.pixels[dst * ch + c] = float(d * inv);
                         } else {
-                            float s = 0.f;
-                            for (size_t i = 0; i < list.size(); ++i) {
-                                const float v = list[i]->images.find(o.name)->pixels[src * ch + c];
-                                s = i == 0 ? v : s + v;
-                            }
-                            o.pixels[dst * ch + c] = s * inv;
+                            float v = src[0][k];
+                            for (size_t i = 1; i < src.size(); ++i) v += src[i][k];
+                            o.pixels[dst * ch + c] = v * inv;
                         }
                     }
                 }
