@@ -13,6 +13,7 @@
 #include <cstring>
 #include <functional>
 #include <map>
+#include <set>
 
 namespace specula::graph {
 
@@ -337,12 +338,27 @@ GraphDesc parseGraph(const json& mat, const std::string& pointer, const ParseOpt
 
 // ---- compilation ---------------------------------------------------------------------------------
 
+namespace {
+// Whether NodeParams::read can take port k of a node fed by its binding from the shading point itself: a numeric
+// member of the parameter struct, declared with that binding and as wide as it (Instr::boundPorts).
+bool readsBindingDirectly(const NodeSpec& spec, size_t k) {
+    if (!spec.params) return false;
+    for (const ParamField& f : spec.params->fields)
+        if (f.port == k)
+            return f.kind == ParamField::Floats && f.binding == spec.inputs[k].binding &&
+                   f.width == typeWidth(bindingType(f.binding));
+    return false;
+}
+}  // namespace
+
 Program Program::compile(const GraphDesc& g, const std::vector<std::pair<int, int>>& roots, const GraphLoadContext* load) {
     Program prog;
     std::vector<int> live = g.liveOrder(roots);
     std::vector<std::vector<uint16_t>> outRegs(g.nodes.size());
     std::vector<char> constNode(g.nodes.size(), 0);
     std::map<GeomBinding, uint16_t> bindingRegs;
+    std::vector<GeomBinding> bindingOrder;  // in order of first use: the prologue's order
+    std::set<GeomBinding> loadedBindings;   // bindings some instruction reads through its register
     auto alloc = [&](int w) {
         // Instr holds 16-bit register indices: a graph that needs more registers is refused here rather than shaded
         // with wrapped indices (a 14-level tree of closure.add printed f = 0 where 0.159 is right; issue 16).
@@ -390,11 +406,17 @@ Program Program::compile(const GraphDesc& g, const std::vector<std::pair<int, in
                     if (it == bindingRegs.end()) {
                         uint16_t r = alloc(typeWidth(bindingType(p.binding)));
                         it = bindingRegs.emplace(p.binding, r).first;
-                        prog.prologue_.push_back({p.binding, r});
+                        bindingOrder.push_back(p.binding);
                     }
                     ins.in[k] = it->second;
                     allConst = false;
                     dynamicPorts |= 1u << k;
+                    // A member of the node's parameter struct of the binding's width is read from the shading point
+                    // directly (Instr::boundPorts); anything else reads the register, which the prologue then fills.
+                    if (readsBindingDirectly(spec, k))
+                        ins.boundPorts |= 1u << k;
+                    else
+                        loadedBindings.insert(p.binding);
                     break;
                 }
                 case InputValue::Kind::Literal:
@@ -417,6 +439,7 @@ Program Program::compile(const GraphDesc& g, const std::vector<std::pair<int, in
             // Constant folding: run the node once now; its outputs become template constants.
             EvalContext ctx;
             ctx.r = prog.tmpl_.data();
+            ctx.constants = prog.tmpl_.data();
             spec.cpu(ctx, ins);
             constNode[ni] = 1;
             ++prog.folded_;
@@ -442,8 +465,14 @@ Program Program::compile(const GraphDesc& g, const std::vector<std::pair<int, in
             }
         if (spec.has(kEmissive)) prog.emissive_ = true;
         if (spec.params) prog.preRead(ins, *spec.params, dynamicPorts);
+        // A shade may skip copying the register template when no instruction reads a register it did not write:
+        // every port of every node pre-read or taken from the shading point (closure pool indices are read from the
+        // template itself, slotOf). Nodes without a parameter struct read their registers directly.
+        if (!ins.constLayout || (ins.dynamicPorts & ~ins.boundPorts) != 0) prog.readsTemplate_ = true;
         prog.code_.push_back(ins);
     }
+    for (GeomBinding b : bindingOrder)
+        if (loadedBindings.count(b)) prog.prologue_.push_back({b, bindingRegs[b]});
     for (auto& r : roots) prog.rootRegs_.push_back(outRegs[r.first][r.second]);
     if (!roots.empty() && g.nodes[roots[0].first].spec->outputs[roots[0].second].type == TypeDesc::Closure)
         prog.outSlot_ = int(prog.tmpl_[prog.rootRegs_[0]]);
@@ -458,7 +487,8 @@ void Program::preRead(Instr& ins, const ParamLayout& layout, uint32_t dynamicPor
     std::shared_ptr<std::max_align_t[]> storage(new std::max_align_t[words]());
     std::shared_ptr<char> block(storage, reinterpret_cast<char*>(storage.get()));
     for (const ParamField& f : layout.fields) {
-        if (f.kind == ParamField::Closure) dynamicPorts |= 1u << f.port;
+        // A closure port holds a pool index, fixed per program: constant like a literal.
+        if (f.kind == ParamField::Closure) dynamicPorts &= ~(1u << f.port);
         if (!(dynamicPorts >> f.port & 1)) readParamField(tmpl_.data(), ins, f, block.get());
     }
     ins.constParams = block.get();
@@ -468,8 +498,8 @@ void Program::preRead(Instr& ins, const ParamLayout& layout, uint32_t dynamicPor
 }
 
 void Program::execute(const ShadingPoint& sp, ScratchArena& arena, float* r, Closure** cl, Color3* em, Closure* out,
-                      Color3* emission) const {
-    std::memcpy(r, tmpl_.data(), tmpl_.size() * sizeof(float));
+                      Color3* emission, bool wholeRegisterFile) const {
+    if (wholeRegisterFile || readsTemplate_) std::memcpy(r, tmpl_.data(), tmpl_.size() * sizeof(float));
     for (size_t s = 0; s < slots_; ++s) {
         em[s] = Color3(0.f);
         if (out && int(s) == outSlot_)
@@ -480,6 +510,7 @@ void Program::execute(const ShadingPoint& sp, ScratchArena& arena, float* r, Clo
     for (const Load& l : prologue_) loadBinding(l.binding, sp, r + l.reg);
     EvalContext ctx;
     ctx.r = r;
+    ctx.constants = tmpl_.data();
     ctx.sp = &sp;
     ctx.arena = &arena;
     ctx.closures = cl;
@@ -493,7 +524,7 @@ const float* Program::run(const ShadingPoint& sp, ScratchArena& arena, Closure* 
     size_t n = std::max<size_t>(slots_, 1);
     auto** cl = static_cast<Closure**>(arena.allocate(n * sizeof(Closure*), alignof(Closure*)));
     auto* em = static_cast<Color3*>(arena.allocate(n * sizeof(Color3), alignof(Color3)));
-    execute(sp, arena, r, cl, em, out, emission);
+    execute(sp, arena, r, cl, em, out, emission, true);
     return r;
 }
 
@@ -506,7 +537,7 @@ void Program::shade(const ShadingPoint& sp, ScratchArena& arena, Closure* out, C
     alignas(16) float r[kStackRegs];
     Closure* cl[kStackSlots];
     Color3 em[kStackSlots];
-    execute(sp, arena, r, cl, em, out, emission);
+    execute(sp, arena, r, cl, em, out, emission, false);
 }
 
 }  // namespace specula::graph

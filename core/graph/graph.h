@@ -74,11 +74,17 @@ public:
     size_t registerCount() const { return tmpl_.size(); }
     size_t closureSlots() const { return slots_; }
     bool emissive() const { return emissive_; }
+    // What a shade does besides running the nodes: geometry bindings loaded into registers (those not read from the
+    // shading point directly, Instr::boundPorts), and whether it copies the register template first.
+    size_t prologueLoads() const { return prologue_.size(); }
+    bool readsTemplate() const { return readsTemplate_; }
 
 private:
     // Fills ins.constParams with the ports of 'layout' that are constant in this program (Instr::constParams).
     void preRead(Instr& ins, const ParamLayout& layout, uint32_t dynamicPorts);
-    void execute(const ShadingPoint& sp, ScratchArena& arena, float* r, Closure** cl, Color3* em, Closure* out, Color3* emission) const;
+    // wholeRegisterFile: run() hands the registers out, so the template is copied even where no instruction reads it.
+    void execute(const ShadingPoint& sp, ScratchArena& arena, float* r, Closure** cl, Color3* em, Closure* out, Color3* emission,
+                 bool wholeRegisterFile) const;
     struct Load {
         GeomBinding binding;
         uint16_t reg;
@@ -91,6 +97,7 @@ private:
     int outSlot_ = -1;
     size_t slots_ = 0, folded_ = 0;
     bool emissive_ = false;
+    bool readsTemplate_ = false;  // some instruction reads a register no earlier instruction wrote (see compile)
 };
 
 }  // namespace specula::graph

@@ -72,7 +72,9 @@ inline bool wanted(const Instr& i, OutPort<T> o) {
     return (i.usedOutputs >> o.index) & 1;
 }
 // The closure (and its emission) of a closure output.
-inline int slotOf(const EvalContext& c, const Instr& i, OutPort<ClosureRef> o) { return int(c.r[i.out[o.index]]); }
+// The pool index is fixed per program, so it is read from the register template: a shade that copies no template
+// (Program::shade) still finds it.
+inline int slotOf(const EvalContext& c, const Instr& i, OutPort<ClosureRef> o) { return int(c.constants[i.out[o.index]]); }
 
 // Reads port fd of instruction i from the registers r into the parameter struct at base. Program::compile uses it
 // with the register template to pre-read the constant ports; NodeParams::read with the shade's registers.
@@ -181,6 +183,7 @@ public:
     }
     NodeParams& bind(GeomBinding b) {
         ports_.back().binding = b;
+        if (!layout_.fields.empty() && layout_.fields.back().port == ports_.size() - 1) layout_.fields.back().binding = b;
         return *this;
     }
     NodeParams& orientsByTangent() {  // connected or non-zero, the result turns with the tangent (anisotropy)
@@ -211,8 +214,14 @@ public:
         char* base = reinterpret_cast<char*>(&p);
         if (i.constLayout == &layout_) {
             std::memcpy(base, i.constParams, sizeof(P));
-            for (uint32_t m = i.dynamicPorts & dynamicCandidates_; m; m &= m - 1)
-                readParamField(c.r, i, layout_.fields[fieldOfPort_[__builtin_ctz(m)]], base);
+            for (uint32_t m = i.dynamicPorts & dynamicCandidates_; m; m &= m - 1) {
+                const int port = __builtin_ctz(m);
+                const ParamField& fd = layout_.fields[fieldOfPort_[port]];
+                if (i.boundPorts >> port & 1)
+                    loadBinding(fd.binding, *c.sp, reinterpret_cast<float*>(base + fd.offset));
+                else
+                    readParamField(c.r, i, fd, base);
+            }
             return p;
         }
         for (const ParamField& fd : layout_.fields) readParamField(c.r, i, fd, base);
@@ -228,7 +237,7 @@ private:
         if (port >= 32) fatal("more than 32 ports");
         fieldOfPort_[port] = uint8_t(layout_.fields.size());
         dynamicCandidates_ |= 1u << port;
-        layout_.fields.push_back({uint16_t(offset), width, kind, port});
+        layout_.fields.push_back({uint16_t(offset), width, kind, port, GeomBinding::None});
     }
     template <class M>
     static size_t offsetOf(M P::*m) {

@@ -198,6 +198,7 @@ struct ParamField {
     uint8_t width;
     Kind kind;
     uint8_t port;
+    GeomBinding binding;  // the port's default geometry binding (NodeParams::bind), None if it has none
 };
 struct ParamLayout {
     size_t size = 0, align = 1;
@@ -264,11 +265,15 @@ struct Instr {
     const void* constParams = nullptr;
     const ParamLayout* constLayout = nullptr;
     uint32_t dynamicPorts = 0xFFFFFFFFu;
+    // Of the dynamic ports, those fed by their own geometry binding (PortSpec::binding): NodeParams::read takes them
+    // from the shading point itself, so no register (and no prologue load) stands between the two.
+    uint32_t boundPorts = 0;
 };
 
 // Per-evaluation state the instruction functions see.
 struct EvalContext {
     float* r = nullptr;                 // register file
+    const float* constants = nullptr;   // the program's register template (closure pool indices live there)
     const ShadingPoint* sp = nullptr;   // null while constant folding
     ScratchArena* arena = nullptr;      // lobes are allocated here
     Closure* const* closures = nullptr; // closure pool: a closure register holds an index into it

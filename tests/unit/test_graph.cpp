@@ -8,6 +8,7 @@
 #include "core/render/lobes/lambert.h"
 
 #include <gtest/gtest.h>
+#include <limits>
 #include <nlohmann/json.hpp>
 
 using namespace specula;
@@ -319,4 +320,59 @@ TEST(GraphMaterial, PreReadConstantPortsMatchPortsReadPerShade) {
     longer.n = Vec3(0, 0, 2);
     EXPECT_EQ(value(literal, longer), ref);
     EXPECT_EQ(value(dynamic, longer), value(ggx(0.8, json::object()), sp));
+}
+
+namespace {
+// Fills the stack below the caller with NaN, so a shade that read a register it had not written (the template copy
+// Program::shade skips when no node needs it) would see garbage rather than a lucky zero.
+[[gnu::noinline]] void dirtyStack() {
+    volatile float junk[8192];
+    for (float& f : const_cast<float(&)[8192]>(junk)) f = std::numeric_limits<float>::quiet_NaN();
+}
+}  // namespace
+
+TEST(GraphMaterial, BindingsAreReadFromTheShadingPointAndTheTemplateCopiedOnlyWhenRead) {
+    // Two BSDFs on their own normal and tangent, summed: every port is constant, a closure or a binding.
+    json direct = {{"g", {{"type", "bsdf.ggx"}, {"inputs", {{"roughness", 0.5}, {"anisotropy", 0.6}, {"f0", {0.9, 0.6, 0.5}}}}}},
+                   {"d", {{"type", "bsdf.diffuse"}, {"inputs", {{"color", 0.5}}}}},
+                   {"sum", {{"type", "closure.add"}, {"inputs", {{"a", "@g.bsdf"}, {"b", "@d.bsdf"}}}}}};
+    // The same with the diffuse normal through a node without a parameter struct: the template is copied.
+    json viaNode = direct;
+    viaNode["n"] = {{"type", "geometry.normal"}};
+    viaNode["d"]["inputs"]["normal"] = "@n.N";
+    auto a = load({{"nodes", direct}, {"output", "@sum.bsdf"}});
+    auto b = load({{"nodes", viaNode}, {"output", "@sum.bsdf"}});
+    const Program& pa = std::dynamic_pointer_cast<GraphMaterial>(a)->program();
+    const Program& pb = std::dynamic_pointer_cast<GraphMaterial>(b)->program();
+    EXPECT_EQ(pa.prologueLoads(), 0u);
+    EXPECT_FALSE(pa.readsTemplate());
+    EXPECT_EQ(pb.prologueLoads(), 0u);  // every registered binding port is a member of its node's struct
+    EXPECT_TRUE(pb.readsTemplate());
+
+    ShadingPoint sp = makeSp();
+    sp.n = Vec3(0.3f, -0.2f, 1.1f);  // not unit: the nodes normalise it
+    sp.tangent = Vec4(0.9f, 0.4f, 0.1f, -1.f);
+    const Frame frame = Frame::fromNormalTangent(glm::normalize(sp.n), Vec3(sp.tangent));
+    float alpha = 0.25f, aspect = std::sqrt(1.f - 0.54f);
+    GgxLobe ggx(alpha / aspect, alpha * aspect, Fresnel::schlick(Color3(0.9f, 0.6f, 0.5f)));
+    for (const auto& mat : {a, b}) {
+        ScratchArena arena;
+        Closure shaded, ran;
+        dirtyStack();
+        mat->shade(sp, arena, shaded);
+        std::dynamic_pointer_cast<GraphMaterial>(mat)->program().run(sp, arena, &ran, nullptr);
+        ASSERT_EQ(shaded.size(), 2);
+        for (int k = 0; k < 12; ++k) {
+            Vec3 wo = glm::normalize(Vec3(0.1f * k - 0.6f, 0.3f, 1.f)), wi = glm::normalize(Vec3(0.5f, -0.05f * k, 0.8f));
+            BsdfEval got = test::query(shaded, wo, wi).f, again = test::query(ran, wo, wi).f;
+            Vec3 woL = frame.toLocal(wo), wiL = frame.toLocal(wi);
+            Color3 spec = ggx.eval(woL, wiL);
+            for (int c = 0; c < 3; ++c) {
+                EXPECT_EQ(got.specular[c], again.specular[c]);
+                EXPECT_EQ(got.diffuse[c], again.diffuse[c]);
+                EXPECT_NEAR(got.specular[c], spec[c], 1e-6f * std::max(1.f, spec[c]));
+                EXPECT_NEAR(got.diffuse[c], 0.5f / kPi * std::max(wiL.z, 0.f), 1e-6f);
+            }
+        }
+    }
 }
