@@ -13,7 +13,7 @@ also removes what else the first frame pays (cache lookup, first touch of the re
 Mesa llvmpipe's GL_TIME_ELAPSED is unreliable (about 190x the wall time, docs/preview.md), so on llvmpipe the ratios
 use the wall clock; on any other renderer they use the GPU timer.
 
-  bench/bench_preview.py [--specula build/bin/specula] [--resolution 1920x1080] [--frames 3] [--repeat 1] [--only a,b]
+  bench/bench_preview.py [--specula build/bin/specula] [--resolution 1920x1080] [--frames 3] [--repeat 1] [--only a,b] [--no-output]
                          [--json OUT]
 """
 import argparse
@@ -83,10 +83,10 @@ SCENES = [
 ]
 
 
-def preview(specula, path, resolution, frames, out_dir, env):
-    out = os.path.join(out_dir, "frame.exr")
-    r = subprocess.run([specula, "preview", path, "--resolution", resolution, "--frames", str(frames), "--json",
-                        "-o", out], capture_output=True, text=True, env=env)
+def preview(specula, path, resolution, frames, out_dir, env, write=True):
+    out = ["-o", os.path.join(out_dir, "frame.exr")] if write else ["--no-output"]
+    r = subprocess.run([specula, "preview", path, "--resolution", resolution, "--frames", str(frames), "--json"] + out,
+                       capture_output=True, text=True, env=env)
     if r.returncode:
         raise SystemExit("specula preview failed (%d): %s" % (r.returncode, r.stderr.strip()[-1000:]))
     return json.loads(r.stdout.strip().splitlines()[-1])
@@ -100,6 +100,8 @@ def main():
     ap.add_argument("--repeat", type=int, default=1, help="interleaved rounds; the min per scene is kept (default 1)")
     ap.add_argument("--only", default="", help="comma-separated scene names (prefixes); the GGX baseline always runs")
     ap.add_argument("--json", default="", help="also write the rows as JSON to this file")
+    ap.add_argument("--no-output", action="store_true",
+                    help="time without writing frames (`specula preview --no-output`: no image libraries needed)")
     args = ap.parse_args()
     only = [s.strip() for s in args.only.split(",") if s.strip()]
     scenes = [s for s in SCENES if s[0] == "ggx" or not only or any(s[0].startswith(o) for o in only)]
@@ -116,13 +118,13 @@ def main():
             paths.append(os.path.join(tmp, "scene%d.json" % i))
             with open(paths[-1], "w") as f:
                 json.dump(doc, f)
-            preview(args.specula, paths[-1], "64x36", 1, tmp, env)  # compiles the program into the shader cache
+            preview(args.specula, paths[-1], "64x36", 1, tmp, env, not args.no_output)  # compiles the program into the shader cache
             rows.append({"scene": name, "gpu_ms": float("inf"), "wall_ms": float("inf")})
         # Rounds interleave the scenes, so that a load change on a shared machine hits all of them; the min is kept.
         for rnd in range(args.repeat):
             for path, row in zip(paths, rows):
-                one = preview(args.specula, path, args.resolution, 1, tmp, env)
-                many = preview(args.specula, path, args.resolution, 1 + args.frames, tmp, env)
+                one = preview(args.specula, path, args.resolution, 1, tmp, env, not args.no_output)
+                many = preview(args.specula, path, args.resolution, 1 + args.frames, tmp, env, not args.no_output)
                 n = 1 + args.frames
                 row["renderer"] = many["renderer"]
                 for key, out in (("gpu_ms_per_frame", "gpu_ms"), ("wall_ms_per_frame", "wall_ms")):

@@ -37,21 +37,23 @@ void addPreviewCommand(CLI::App& app, int& exitCode) {
                                               "headless EGL) to EXR (AOVs) and an OCIO-viewed PNG");
     static std::string scenePath, outPath, resolution;
     static int frames = 1;
-    static bool json = false;
+    static bool json = false, noOutput = false;
     cmd->add_option("scene", scenePath, "Scene file (JSON, format v1)")->required();
     cmd->add_option("-o,--output", outPath, "Output EXR (default: <scene name>.preview.exr in the current folder)");
     cmd->add_option("--resolution", resolution, "Image size WxH (overrides the scene)");
     cmd->add_option("--frames", frames, "Frames to draw (the GPU time is their mean)")->check(CLI::Range(1, 10000));
     cmd->add_flag("--json", json, "Print the timing as one JSON line on stdout");
+    // Timing runs (bench/bench_preview.py) on a machine that has a GPU but not the image libraries.
+    cmd->add_flag("--no-output", noOutput, "Draw and time only: write no image")->excludes("--output");
     cmd->callback([&exitCode] {
         SceneOverrides ov;
         if (!parseResolutionOption(resolution, ov)) {
             exitCode = kExitUsage;
             return;
         }
-        if (outPath.empty()) outPath = fs::path(scenePath).stem().string() + ".preview.exr";
+        if (outPath.empty() && !noOutput) outPath = fs::path(scenePath).stem().string() + ".preview.exr";
         try {
-            checkOutputPath(outPath, scenePath);
+            if (!noOutput) checkOutputPath(outPath, scenePath);
             preview::PreviewScene ps = preview::loadPreviewScene(scenePath, ov);
             const Scene& scene = ps.scene;
             for (const std::string& w : scene.warnings) std::fprintf(stderr, "specula: warning: %s\n", w.c_str());
@@ -59,14 +61,15 @@ void addPreviewCommand(CLI::App& app, int& exitCode) {
             po.frames = frames;
             preview::PreviewOutput out = preview::renderPreview(scene, ps.materials, ps.baseDir, po);
             for (const std::string& w : out.warnings) std::fprintf(stderr, "specula: warning: %s\n", w.c_str());
-            WrittenFiles written = writeRenderResult(outPath, scene, out.output.images, out.output.stats);
+            WrittenFiles written;
+            if (!noOutput) written = writeRenderResult(outPath, scene, out.output.images, out.output.stats);
             if (json) {
                 nlohmann::json line = {{"event", "done"}, {"renderer", out.renderer}, {"width", scene.render.width},
                                        {"height", scene.render.height}, {"frames", frames},
                                        {"gpu_ms_per_frame", out.gpuMsPerFrame}, {"wall_ms_per_frame", out.wallMsPerFrame},
                                        {"setup_seconds", out.setupSeconds},
                                        {"exr", written.exr.empty() ? nlohmann::json() : nlohmann::json(written.exr)},
-                                       {"png", written.png}};
+                                       {"png", written.png.empty() ? nlohmann::json() : nlohmann::json(written.png)}};
                 std::printf("%s\n", line.dump().c_str());
             }
             std::fprintf(stderr,
@@ -74,8 +77,9 @@ void addPreviewCommand(CLI::App& app, int& exitCode) {
                          "set-up %.2fs\n",
                          scene.render.width, scene.render.height, out.renderer.c_str(), out.gpuMsPerFrame,
                          out.wallMsPerFrame, frames, out.setupSeconds);
-            std::fprintf(stderr, "specula: wrote %s\n",
-                         (written.exr.empty() ? written.png : written.exr + " and " + written.png).c_str());
+            if (!noOutput)
+                std::fprintf(stderr, "specula: wrote %s\n",
+                             (written.exr.empty() ? written.png : written.exr + " and " + written.png).c_str());
         } catch (const std::exception& e) {
             std::fprintf(stderr, "specula: error: %s\n", e.what());
             exitCode = exitCodeFor(e);

@@ -15,6 +15,7 @@ limits, the CPU side is rendered again with the camera moved by 1/256 pixel in f
 Scenes listed in KNOWN_GAPS are measured and printed but not asserted (docs/preview.md says why); every other scene
 must pass, and a known gap that starts to pass is reported so that the list shrinks."""
 import glob
+import json
 import os
 import subprocess
 import sys
@@ -55,6 +56,15 @@ def main():
     scenes = sorted(glob.glob(os.path.join(root, "examples", "*.json")) +
                     glob.glob(os.path.join(root, "examples", "*", "*.json")))
     failures, newly_passing, rows = [], [], []
+    # `--no-output` (timing runs): draws, reports, and writes nothing, not even the default <scene>.preview.exr.
+    timing_dir = os.path.join(out_dir, "no-output")
+    os.makedirs(timing_dir, exist_ok=True)
+    r = subprocess.run([binary, "preview", os.path.join(root, "examples", "anchor-sphere.json"), "--resolution", "32x18",
+                        "--no-output", "--json"], capture_output=True, text=True, cwd=timing_dir)
+    line = json.loads(r.stdout.strip().splitlines()[-1]) if r.returncode == 0 and r.stdout.strip() else {}
+    if r.returncode or line.get("png", "") is not None or line.get("exr", "") is not None or \
+            not line.get("wall_ms_per_frame", 0) > 0 or os.listdir(timing_dir):
+        failures.append("--no-output: exit %d, %s, files %s" % (r.returncode, r.stdout.strip()[-200:], os.listdir(timing_dir)))
     for path in scenes:
         name = os.path.relpath(path, os.path.join(root, "examples"))[:-5]
         stem = os.path.join(out_dir, name.replace("/", "_"))
