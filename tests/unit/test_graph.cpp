@@ -326,8 +326,8 @@ namespace {
 // Fills the stack below the caller with NaN, so a shade that read a register it had not written (the template copy
 // Program::shade skips when no node needs it) would see garbage rather than a lucky zero.
 [[gnu::noinline]] void dirtyStack() {
-    volatile float junk[8192];
-    for (float& f : const_cast<float(&)[8192]>(junk)) f = std::numeric_limits<float>::quiet_NaN();
+    volatile float junk[8192];  // volatile: the stores are not dead code although nothing reads them
+    for (int i = 0; i < 8192; ++i) junk[i] = std::numeric_limits<float>::quiet_NaN();
 }
 }  // namespace
 
