@@ -97,7 +97,9 @@ private:
     int outSlot_ = -1;
     size_t slots_ = 0, folded_ = 0;
     bool emissive_ = false;
-    bool readsTemplate_ = false;  // some instruction reads a register no earlier instruction wrote (see compile)
+    // Whether a shade copies the template: false only when every instruction has a parameter struct and every port that
+    // varies is a direct binding (a conservative test: ports fed by other nodes also set it; see compile).
+    bool readsTemplate_ = false;
 };
 
 }  // namespace specula::graph
