@@ -12,6 +12,10 @@
 
 namespace specula::fuzz {
 
+// The texture side cap of the scene and graph targets (a host's SceneLimits::maxTextureSide): every texture the seeds
+// use fits (make_corpus.py shrinks generated maps to 64), and the refusal above it is a path worth fuzzing.
+constexpr int kFuzzTextureSide = 256;
+
 // A folder of this process's own under $TMPDIR (made once, emptied by clearScratch), for files the loaders read.
 // Caches (glint dictionaries, P-NDFs, LTC prefilters) go to $SPECULA_CACHE_DIR, which fuzz/run.sh keeps in the build
 // folder so that seeds do not rebuild them at every run.

@@ -17,7 +17,8 @@
 using namespace specula;
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
-    static TextureStore store(ColorConfig::load("builtin"));
+    // Sides capped as in fuzz_scene (kFuzzTextureSide): generated normal maps obey the cap too.
+    static TextureStore store(ColorConfig::load("builtin"), fuzz::kFuzzTextureSide);
     static const std::string baseDir = std::string(SPECULA_SOURCE_DIR) + "/examples";
     nlohmann::json material;
     if (!fuzz::parseJson(data, size, material)) return 0;

@@ -41,7 +41,7 @@ for t in $TARGETS; do
   log="$BUILD/fuzz-$t.log"
   # -rss_limit_mb: the targets' own limits (textures 4 GiB of floats) are checked against the memory budget first.
   if [ $SMOKE = 1 ]; then LIMIT=(-seed=1 -runs="$(smoke_runs "$t")"); fi
-  "$BUILD/fuzz/$t" "$corpus" "${LIMIT[@]}" -rss_limit_mb=3072 -max_len=65536 -timeout=60 -print_final_stats=1 \
+  "$BUILD/fuzz/$t" "$corpus" "${LIMIT[@]}" -detect_leaks=0 -rss_limit_mb=3072 -max_len=65536 -timeout=60 -print_final_stats=1 \
       -artifact_prefix="$ARTIFACTS/$t/" >"$log" 2>&1
   rc=$?
   execs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)

@@ -1,6 +1,7 @@
 // Image output and comparison with OpenImageIO: multi-layer float EXR, OCIO-viewed 8-bit PNG (both written
 // atomically via temp file + rename), ImageSet reading by "layer." prefix, RMSE/MAE/PSNR and a diff map.
 #include "core/io/image_io.h"
+#include "core/io/image_read.h"
 
 #include "core/color/color_config.h"
 #include "core/util/error.h"
@@ -286,11 +287,74 @@ void writePng(const std::string& path, const ImageSet& images, const ColorConfig
 
 // ---- reading --------------------------------------------------------------------------------------
 
+std::string imageHeaderProblem(const std::string& path) {
+    std::ifstream f(path, std::ios::binary);
+    unsigned char head[8];
+    if (!f.read(reinterpret_cast<char*>(head), 8)) return "";  // unreadable or short: the decoder says so
+    if (!(head[0] == 0x76 && head[1] == 0x2f && head[2] == 0x31 && head[3] == 0x01)) return "";  // not OpenEXR
+    std::error_code ec;
+    const uint64_t fileBytes = fs::file_size(path, ec);
+    if (ec) return "";
+    const bool multipart = (head[5] & 0x10) != 0;  // version field bit 12 (OpenEXR file layout: "multi-part")
+    // Names and type names are at most 255 bytes (long-name files); anything else is malformed, which the decoder
+    // reports itself.
+    auto readString = [&](std::string& s) {
+        s.clear();
+        char c;
+        while (f.get(c)) {
+            if (c == '\0') return true;
+            if (s.size() >= 255) return false;
+            s.push_back(c);
+        }
+        return false;
+    };
+    std::string name, type;
+    for (int attributes = 0; attributes < (1 << 16); ++attributes) {  // bounded walk
+        if (!readString(name)) return "";
+        if (name.empty()) {  // end of a header; a multi-part file's list of headers ends with an empty one
+            if (!multipart || f.peek() == 0 || f.peek() == std::char_traits<char>::eof()) return "";
+            continue;
+        }
+        unsigned char b[4];
+        if (!readString(type) || !f.read(reinterpret_cast<char*>(b), 4)) return "";
+        const int64_t size = int32_t(uint32_t(b[0]) | uint32_t(b[1]) << 8 | uint32_t(b[2]) << 16 | uint32_t(b[3]) << 24);
+        const std::streamoff pos = f.tellg();
+        if (pos < 0) return "";
+        const uint64_t left = fileBytes > uint64_t(pos) ? fileBytes - uint64_t(pos) : 0;
+        if (size < 0 || uint64_t(size) > left)
+            return "its OpenEXR header's attribute '" + name + "' (" + type + ") declares " + std::to_string(size) +
+                   " bytes, but only " + std::to_string(left) + " bytes follow in the file";
+        f.seekg(std::streamoff(size), std::ios::cur);
+    }
+    return "";
+}
+
+bool readPixelsAsFloat(OIIO::ImageInput& in, int subimage, float* out) {
+    if (!in.seek_subimage(subimage, 0)) return false;
+    const OIIO::ImageSpec spec = in.spec();
+    // TypeUnknown, not the file's format by name: OpenImageIO 2.4.7 reads straight into the caller's buffer only then.
+    if (spec.format == OIIO::TypeDesc::FLOAT && spec.channelformats.empty())
+        return in.read_image(subimage, 0, 0, spec.nchannels, OIIO::TypeUnknown, out);
+    if (!spec.channelformats.empty())  // mixed channel formats (rare): OpenImageIO's converting read
+        return in.read_image(subimage, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, out);
+    const size_t values = size_t(spec.width) * size_t(spec.height) * size_t(spec.nchannels);
+    std::vector<unsigned char> native(values * spec.format.size());
+    if (!in.read_image(subimage, 0, 0, spec.nchannels, OIIO::TypeUnknown, native.data())) return false;
+    const size_t step = size_t(1) << 30;  // convert_pixel_values counts in an int
+    for (size_t i = 0; i < values; i += step)
+        if (!OIIO::convert_pixel_values(spec.format, native.data() + i * spec.format.size(), OIIO::TypeDesc::FLOAT,
+                                        out + i, int(std::min(step, values - i))))
+            return false;
+    return true;
+}
+
 ImageSet readImageSet(const std::string& path) {
     std::error_code ec;
     if (!fs::exists(path, ec)) throw ImageIoError("image file not found: '" + path + "'");
     OIIO::ImageSpec config;
     config.attribute("oiio:UnassociatedAlpha", 1);  // the file's values, unaltered
+    if (const std::string problem = imageHeaderProblem(path); !problem.empty())
+        throw ImageIoError("cannot read image '" + path + "': " + problem);
     auto in = OIIO::ImageInput::open(path, &config);
     if (!in) throw ImageIoError("cannot read image '" + path + "': " + OIIO::geterror());
 
@@ -342,7 +406,7 @@ ImageSet readImageSet(const std::string& path) {
                                " channels, beyond the limit of 2^26 pixels and 1024 channels");
         std::string partName = sub > 0 ? std::string(spec.get_string_attribute("name")) : std::string();
         buffers.emplace_back(size_t(spec.width) * size_t(spec.height) * size_t(spec.nchannels));
-        if (!in->read_image(sub, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, buffers.back().data()))
+        if (!readPixelsAsFloat(*in, sub, buffers.back().data()))
             throw ImageIoError("cannot read image '" + path + "': " + in->geterror());
         for (int ch = 0; ch < spec.nchannels; ++ch) {
             std::string full = ch < int(spec.channelnames.size()) ? spec.channelnames[size_t(ch)]

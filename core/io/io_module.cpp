@@ -4,6 +4,7 @@
 
 #include "core/util/error.h"
 
+#include <algorithm>
 #include <dlfcn.h>
 
 #include <atomic>
@@ -98,6 +99,7 @@ TextureHandle TextureStore::load(const std::string& path, const std::string& col
     }
     return table().textureLoad(impl_->real, path, colorspace);
 }
+int TextureStore::maxSide() const { return std::clamp(impl_->maxSide, 1, 65536); }  // as the real store clamps it
 int TextureStore::width(TextureHandle h) const { return table().textureWidth(impl_->real, h); }
 int TextureStore::height(TextureHandle h) const { return table().textureHeight(impl_->real, h); }
 int TextureStore::channels(TextureHandle h) const { return table().textureChannels(impl_->real, h); }

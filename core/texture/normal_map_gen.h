@@ -48,9 +48,10 @@ NormalMap generateBrushedNormalMap(int size, uint64_t seed, double angleDegrees,
 
 // 'generate:<kind>:<size>:<seed>' names a generated map wherever a normal-map file is expected (texture.image with
 // colorspace raw, texture.lean, bsdf.ltc_normal_map, bsdf.glint_pndf), so scenes can use large maps without shipping
-// multi-megabyte files. Inline: both libspecula and the image-I/O module parse it.
+// multi-megabyte files. Inline: both libspecula and the image-I/O module parse it. maxSide is the host's or scene's
+// cap on texture sides (SceneLimits::maxTextureSide): a generated map is a texture like a file and obeys it.
 inline bool isGeneratedNormalMapName(const std::string& name) { return name.rfind("generate:", 0) == 0; }
-inline NormalMap generateNormalMapFromName(const std::string& name) {
+inline NormalMap generateNormalMapFromName(const std::string& name, int maxSide = 8192) {
     const std::string rest = name.substr(9);
     const size_t a = rest.find(':'), b = a == std::string::npos ? a : rest.find(':', a + 1);
     if (!isGeneratedNormalMapName(name) || b == std::string::npos)
@@ -68,6 +69,9 @@ inline NormalMap generateNormalMapFromName(const std::string& name) {
         throw NormalMapError("'" + name + "': expected generate:<kind>:<size>:<seed> with integer size and seed");
     }
     if (size < 8 || size > 8192) throw NormalMapError("'" + name + "': size must be in [8, 8192]");
+    if (size > maxSide)
+        throw NormalMapError("'" + name + "': size " + std::to_string(size) + " exceeds the texture side limit of " +
+                             std::to_string(maxSide) + " (limits.texture_side)");
     return generateNormalMap(parseNormalMapKind(rest.substr(0, a)), size, seed);
 }
 // The map as an RGB float image, colour = (n + 1)/2, rows top to bottom (what a file of it holds).

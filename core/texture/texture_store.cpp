@@ -7,6 +7,7 @@
 
 #include "core/color/color_config.h"
 #include "core/io/image_io.h"
+#include "core/io/image_read.h"
 #include "core/texture/normal_map_gen.h"
 
 #include <OpenImageIO/hash.h>
@@ -213,21 +214,20 @@ TextureHandle TextureStore::load(const std::string& path, const std::string& col
 
     // ---- read the file (content hash + pixels); heavy work happens without the lock ----
     std::string bytes;
-    OIIO::ImageBuf src;
+    OIIO::ImageSpec spec;
+    std::vector<float> pixels;
     if (generated) {
         // The name is the content (the generator is deterministic), the pixels come from memory.
         NormalMap map;
         try {
-            map = generateNormalMapFromName(path);
+            map = generateNormalMapFromName(path, I.maxSide);
         } catch (const std::exception& err) {
             throw TextureError(err.what());
         }
         bytes = path;
-        OIIO::ImageSpec gen(map.size, map.size, 3, OIIO::TypeDesc::FLOAT);
-        gen.attribute("oiio:ColorSpace", "Raw");
-        src.reset(gen);
-        const std::vector<float> px = encodeNormalMapRgb(map);
-        src.set_pixels(OIIO::ROI(0, map.size, 0, map.size, 0, 1, 0, 3), OIIO::TypeDesc::FLOAT, px.data());
+        spec = OIIO::ImageSpec(map.size, map.size, 3, OIIO::TypeDesc::FLOAT);
+        spec.attribute("oiio:ColorSpace", "Raw");
+        pixels = encodeNormalMapRgb(map);
         if (autoSpace) declared = "raw";
     } else {
         checkTextureFileSize(path);
@@ -240,21 +240,23 @@ TextureHandle TextureStore::load(const std::string& path, const std::string& col
         }
         OIIO::ImageSpec readConfig;
         readConfig.attribute("oiio:UnassociatedAlpha", 1);  // keep straight alpha: colour is converted unpremultiplied
-        src.reset(path, 0, 0, nullptr, &readConfig);
-        if (!src.init_spec(path, 0, 0))
-            throw TextureError("cannot read texture '" + path + "': " + src.geterror());
-        checkTextureDimensions(path, src.spec(), I.maxSide);  // before the pixels: a 300 KB file may claim 100000x100000
-        if (!src.read(0, 0, true, OIIO::TypeDesc::FLOAT))
-            throw TextureError("cannot read texture '" + path + "': " + src.geterror());
+        if (const std::string problem = imageHeaderProblem(path); !problem.empty())
+            throw TextureInputError("texture '" + path + "': " + problem);
+        auto in = OIIO::ImageInput::open(path, &readConfig);
+        if (!in) throw TextureError("cannot read texture '" + path + "': " + OIIO::geterror());
+        spec = in->spec();
+        checkTextureDimensions(path, spec, I.maxSide);  // before the pixels: a 300 KB file may claim 100000x100000
+        if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0) throw TextureError("texture '" + path + "' is empty");
+        if (spec.depth > 1) throw TextureError("texture '" + path + "': volume textures are not supported");
+        pixels.resize(size_t(spec.width) * size_t(spec.height) * size_t(spec.nchannels));
+        if (!readPixelsAsFloat(*in, 0, pixels.data()))
+            throw TextureError("cannot read texture '" + path + "': " + in->geterror());
     }
-    const OIIO::ImageSpec& spec = src.spec();
     auto e = std::make_unique<Entry>();
     e->path = path;
     e->width = spec.width;
     e->height = spec.height;
     e->channels = spec.nchannels;
-    if (e->width <= 0 || e->height <= 0 || e->channels <= 0) throw TextureError("texture '" + path + "' is empty");
-    if (spec.depth > 1) throw TextureError("texture '" + path + "': volume textures are not supported");
 
     if (autoSpace && !generated) {
         // The file's own tag if the config knows it; else 8/16-bit integer = sRGB, float = working space.
@@ -270,11 +272,7 @@ TextureHandle TextureStore::load(const std::string& path, const std::string& col
 
     const size_t npix = size_t(e->width) * size_t(e->height);
     const size_t nc = size_t(e->channels);
-    e->pixels.resize(npix * nc);
-    if (!src.get_pixels(OIIO::ROI(spec.x, spec.x + spec.width, spec.y, spec.y + spec.height, spec.z, spec.z + 1, 0,
-                                  spec.nchannels),
-                        OIIO::TypeDesc::FLOAT, e->pixels.data()))
-        throw TextureError("cannot read texture '" + path + "': " + src.geterror());
+    e->pixels = std::move(pixels);
 
     // ---- colour: declared space -> working linear (RGB only; alpha and extra channels untouched) ----
     try {
@@ -375,6 +373,7 @@ TextureHandle TextureStore::load(const std::string& path, const std::string& col
     return TextureHandle{index};
 }
 
+int TextureStore::maxSide() const { return impl_->maxSide; }
 int TextureStore::width(TextureHandle h) const { return impl_->entry(h).width; }
 int TextureStore::height(TextureHandle h) const { return impl_->entry(h).height; }
 int TextureStore::channels(TextureHandle h) const { return impl_->entry(h).channels; }

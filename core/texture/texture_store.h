@@ -46,6 +46,8 @@ public:
     // for data such as normal maps). Converted to linear working space, MIP-mapped in a cache
     // directory keyed by content+colorspace. Throws TextureError naming the path.
     TextureHandle load(const std::string& path, const std::string& colorspace);
+    // The cap on texture sides given at construction (generated normal maps obey it too).
+    int maxSide() const;
 
     int width(TextureHandle h) const;
     int height(TextureHandle h) const;

@@ -15,8 +15,8 @@ namespace specula::nodes {
 namespace {
 
 // A generated map encoded as an RGB float image in file row order, without a texture store (codegen-only loads).
-void generate(const std::string& name, NormalMapSource& out) {
-    const NormalMap m = generateNormalMapFromName(name);
+void generate(const std::string& name, int maxSide, NormalMapSource& out) {
+    const NormalMap m = generateNormalMapFromName(name, maxSide);
     out.width = out.height = m.size;
     out.channels = 3;
     out.encoded = encodeNormalMapRgb(m);
@@ -47,7 +47,7 @@ NormalMapSource loadNormalMapSource(const graph::PrepareContext& pc, const std::
     const std::string what = std::string(node) + ": normal map '" + file + "'";
     try {
         if (isGeneratedNormalMapName(file)) {
-            generate(file, src);
+            generate(file, pc.load && pc.load->textures ? pc.load->textures->maxSide() : 8192, src);
         } else {
             if (!pc.load || !pc.load->textures)
                 throw InputError(pointer, std::string(node) + " needs a texture store (none was given to the graph loader)");

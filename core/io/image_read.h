@@ -1,0 +1,25 @@
+// Reading images through OpenImageIO safely and without waste: header checks before a decoder allocates, and pixels
+// read as floats without the scratch buffer of OpenImageIO's converting read. Internal to the io module.
+#pragma once
+
+#include <OpenImageIO/imageio.h>
+
+#include <string>
+
+namespace specula {
+
+// Why a file would make a decoder allocate beyond what it holds, or "" when it would not. Only OpenEXR needs it: its
+// header reader allocates every attribute at the size the attribute declares before reading it (a 200-byte file
+// declaring a 2 GiB attribute allocates 2 GiB; under ASan that poisoning was most of fuzz_image's time). The walk
+// reads each header's attribute names, types and sizes (multi-part files included) and requires every size to fit in
+// the bytes left in the file.
+std::string imageHeaderProblem(const std::string& path);
+
+// Reads subimage `subimage` (MIP level 0, every channel) of `in` into `out` as width × height × channels contiguous
+// floats, converted from the file's own format as OpenImageIO's converting read would. Why not read_image(FLOAT)
+// directly: OpenImageIO 2.4 converts through a scratch buffer of about 64 MiB whatever the image's size
+// (ImageInput::read_scanlines' chunk), and under ASan poisoning that buffer took most of the image fuzzer's time
+// (docs/reliability.md). Returns false with the reader's error pending, as read_image does.
+bool readPixelsAsFloat(OIIO::ImageInput& in, int subimage, float* out);
+
+}  // namespace specula
