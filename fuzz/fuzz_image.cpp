@@ -20,10 +20,11 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     static int calls = 0;
     if (++calls % 256 == 0) fuzz::clearScratch();  // MIP caches of earlier inputs
     static const std::shared_ptr<const ColorConfig> color = ColorConfig::load("builtin");
-    // One per input: a store keeps every texture it loaded. Sides capped at 1024 (a host's SceneLimits cap): seeds and
-    // mutants that decode to up to 256 MiB within the compression limit made ASan spend about 80 % of the time
-    // poisoning and faulting in those buffers (10 executions/s); the refusal above the cap is a path worth fuzzing too.
-    TextureStore store(color, 1024);
+    // One per input: a store keeps every texture it loaded. Sides capped at fuzz::kFuzzTextureSide (256, a host's
+    // SceneLimits cap, as in the scene and graph targets): mutants that decode to hundreds of MiB made ASan spend
+    // most of the time poisoning and faulting in those buffers; the decoders run the same code on a 256² image, and
+    // the refusal above the cap is a path worth fuzzing too.
+    TextureStore store(color, fuzz::kFuzzTextureSide);
     // A fresh name per input: the process-wide texture system keeps what it opened by name.
     const std::string path =
         fuzz::writeScratch("image" + std::to_string(calls) + "." + kExt[data[0] % 7], data + 1, size - 1);
