@@ -5,6 +5,7 @@
 
 #include "core/color/color_config.h"
 #include "core/util/error.h"
+#include "core/util/memory_budget.h"
 
 #include <glm/gtc/type_ptr.hpp>
 #include <OpenImageIO/imagebuf.h>
@@ -329,6 +330,21 @@ std::string imageHeaderProblem(const std::string& path) {
     return "";
 }
 
+std::string decodedSizeProblem(const std::string& path, const OIIO::ImageSpec& spec) {
+    const uint64_t w = uint64_t(std::max(spec.width, 0)), h = uint64_t(std::max(spec.height, 0));
+    const uint64_t c = uint64_t(std::max(spec.nchannels, 0)), d = uint64_t(std::max(spec.depth, 1));
+    std::error_code ec;
+    const uint64_t fileBytes = fs::file_size(path, ec);
+    // Each factor is below 2^31 and the callers bound depth and channels first: no overflow.
+    const uint64_t decodedBytes = w * h * d * c * uint64_t(std::max<size_t>(spec.format.size(), 1));
+    constexpr uint64_t kMaxCompression = 2048, kAlwaysDecodable = uint64_t(256) << 20;
+    if (ec || decodedBytes <= kAlwaysDecodable || decodedBytes / kMaxCompression <= fileBytes) return "";
+    return "its header claims " + std::to_string(w) + "x" + std::to_string(h) + " pixels, " + std::to_string(c) +
+           " channels (" + formatBytes(decodedBytes) + " decoded) from a file of " + formatBytes(fileBytes) +
+           ", more than any image compression gives (" + std::to_string(kMaxCompression) +
+           ":1): the file is truncated or damaged";
+}
+
 bool readPixelsAsFloat(OIIO::ImageInput& in, int subimage, float* out) {
     if (!in.seek_subimage(subimage, 0)) return false;
     const OIIO::ImageSpec spec = in.spec();
@@ -404,6 +420,8 @@ ImageSet readImageSet(const std::string& path) {
             throw ImageIoError("cannot read '" + path + "': its header declares " + std::to_string(spec.width) + "x" +
                                std::to_string(spec.height) + " pixels of " + std::to_string(spec.nchannels) +
                                " channels, beyond the limit of 2^26 pixels and 1024 channels");
+        if (const std::string problem = decodedSizeProblem(path, spec); !problem.empty())
+            throw ImageIoError("cannot read '" + path + "': " + problem);
         std::string partName = sub > 0 ? std::string(spec.get_string_attribute("name")) : std::string();
         buffers.emplace_back(size_t(spec.width) * size_t(spec.height) * size_t(spec.nchannels));
         if (!readPixelsAsFloat(*in, sub, buffers.back().data()))

@@ -15,6 +15,13 @@ namespace specula {
 // the bytes left in the file.
 std::string imageHeaderProblem(const std::string& path);
 
+// Why a header's claimed size cannot be what the file decodes to, or "" when it can. A file cannot decode to much
+// more than its size allows: deflate (PNG, EXR zip) stops near 1032:1, and RLE, JPEG and the other EXR codecs below
+// that. A header that claims more (a 111-byte TGA claiming 8294x28461 RGBA: 3.5 GiB of floats, found by fuzz_image) is
+// refused before its pixels are allocated; images under 256 MiB decoded pass whatever their size, so highly
+// compressible images of ordinary size still load.
+std::string decodedSizeProblem(const std::string& path, const OIIO::ImageSpec& spec);
+
 // Reads subimage `subimage` (MIP level 0, every channel) of `in` into `out` as width × height × channels contiguous
 // floats, converted from the file's own format as OpenImageIO's converting read would. Why not read_image(FLOAT)
 // directly: OpenImageIO 2.4 converts through a scratch buffer of about 64 MiB whatever the image's size

@@ -165,18 +165,8 @@ void checkTextureDimensions(const std::string& path, const OIIO::ImageSpec& spec
         throw TextureInputError("texture '" + path + "': its header claims " + claim + " (" + formatBytes(bytes) +
                            " as floats); textures are limited to " + std::to_string(maxSide) + " pixels a side, " +
                            "64 channels and " + formatBytes(kMaxTextureBytes) + " of float pixels");
-    // A file cannot decode to much more than its size allows: deflate (PNG, EXR zip) stops near 1032:1, and RLE, JPEG
-    // and the other EXR codecs below that. A header that claims more (a 111-byte TGA claiming 8294x28461 RGBA: 3.5 GiB
-    // of floats, found by fuzz_image) is refused before its pixels are allocated; images under 256 MiB decoded pass
-    // whatever their size, so highly compressible textures of ordinary size still load.
-    std::error_code ec;
-    const uint64_t fileBytes = fs::file_size(path, ec);
-    const uint64_t decodedBytes = w * h * d * c * uint64_t(std::max<size_t>(spec.format.size(), 1));
-    constexpr uint64_t kMaxCompression = 2048, kAlwaysDecodable = uint64_t(256) << 20;
-    if (!ec && decodedBytes > kAlwaysDecodable && decodedBytes / kMaxCompression > fileBytes)
-        throw TextureInputError("texture '" + path + "': its header claims " + claim + " (" + formatBytes(decodedBytes) +
-                                " decoded) from a file of " + formatBytes(fileBytes) + ", more than any image compression " +
-                                "gives (" + std::to_string(kMaxCompression) + ":1): the file is truncated or damaged");
+    if (const std::string problem = decodedSizeProblem(path, spec); !problem.empty())
+        throw TextureInputError("texture '" + path + "': " + problem);
     // Read, colour conversion and MIP chain hold about three float copies at once.
     const MemoryBudget budget = memoryBudget();
     if (3 * bytes > budget.availableBytes)
