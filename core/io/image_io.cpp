@@ -20,6 +20,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <memory>
 #include <set>
 #include <sstream>
 #include <fcntl.h>
@@ -354,17 +355,18 @@ bool readPixelsAsFloat(OIIO::ImageInput& in, int subimage, float* out) {
     if (!spec.channelformats.empty())  // mixed channel formats (rare): OpenImageIO's converting read
         return in.read_image(subimage, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, out);
     const size_t values = size_t(spec.width) * size_t(spec.height) * size_t(spec.nchannels);
-    std::vector<unsigned char> native(values * spec.format.size());
-    if (!in.read_image(subimage, 0, 0, spec.nchannels, OIIO::TypeUnknown, native.data())) return false;
+    // Not value-initialised (see readImageSet): a truncated file fails the read before anything is converted.
+    const std::unique_ptr<unsigned char[]> native(new unsigned char[values * spec.format.size()]);
+    if (!in.read_image(subimage, 0, 0, spec.nchannels, OIIO::TypeUnknown, native.get())) return false;
     const size_t step = size_t(1) << 30;  // convert_pixel_values counts in an int
     for (size_t i = 0; i < values; i += step)
-        if (!OIIO::convert_pixel_values(spec.format, native.data() + i * spec.format.size(), OIIO::TypeDesc::FLOAT,
+        if (!OIIO::convert_pixel_values(spec.format, native.get() + i * spec.format.size(), OIIO::TypeDesc::FLOAT,
                                         out + i, int(std::min(step, values - i))))
             return false;
     return true;
 }
 
-ImageSet readImageSet(const std::string& path) {
+ImageSet readImageSet(const std::string& path, int64_t maxPixels) {
     std::error_code ec;
     if (!fs::exists(path, ec)) throw ImageIoError("image file not found: '" + path + "'");
     OIIO::ImageSpec config;
@@ -380,7 +382,9 @@ ImageSet readImageSet(const std::string& path) {
         const float* src;
         int stride;
     };
-    std::vector<std::vector<float>> buffers;
+    // Not value-initialised: a header may claim up to 2^26 pixels of a file that then turns out truncated, and only the
+    // pages the decoder writes should cost anything.
+    std::vector<std::unique_ptr<float[]>> buffers;
     std::vector<Chan> chans;
     std::vector<std::string> fileOrder;  // full channel names, as written (if recorded)
 
@@ -415,21 +419,23 @@ ImageSet readImageSet(const std::string& path) {
         if (spec.depth > 1) throw ImageIoError("cannot read '" + path + "': volume images are not supported");
         // The header decides the allocation, so it is bounded first: no image this program writes or compares is larger
         // than the renderer's 2^26 pixels, and none has more than 1024 channels.
-        if (spec.width < 1 || spec.height < 1 || int64_t(spec.width) * spec.height > (int64_t(1) << 26) || spec.nchannels < 1 ||
+        if (spec.width < 1 || spec.height < 1 || int64_t(spec.width) * spec.height > maxPixels || spec.nchannels < 1 ||
             spec.nchannels > 1024)
             throw ImageIoError("cannot read '" + path + "': its header declares " + std::to_string(spec.width) + "x" +
                                std::to_string(spec.height) + " pixels of " + std::to_string(spec.nchannels) +
-                               " channels, beyond the limit of 2^26 pixels and 1024 channels");
+                               " channels, beyond the limit of " +
+                               (maxPixels == kMaxImageSetPixels ? std::string("2^26") : std::to_string(maxPixels)) +
+                               " pixels and 1024 channels");
         if (const std::string problem = decodedSizeProblem(path, spec); !problem.empty())
             throw ImageIoError("cannot read '" + path + "': " + problem);
         std::string partName = sub > 0 ? std::string(spec.get_string_attribute("name")) : std::string();
-        buffers.emplace_back(size_t(spec.width) * size_t(spec.height) * size_t(spec.nchannels));
-        if (!readPixelsAsFloat(*in, sub, buffers.back().data()))
+        buffers.emplace_back(new float[size_t(spec.width) * size_t(spec.height) * size_t(spec.nchannels)]);
+        if (!readPixelsAsFloat(*in, sub, buffers.back().get()))
             throw ImageIoError("cannot read image '" + path + "': " + in->geterror());
         for (int ch = 0; ch < spec.nchannels; ++ch) {
             std::string full = ch < int(spec.channelnames.size()) ? spec.channelnames[size_t(ch)]
                                                                    : "channel" + std::to_string(ch);
-            Chan c{"", "", buffers.back().data() + ch, spec.nchannels};
+            Chan c{"", "", buffers.back().get() + ch, spec.nchannels};
             auto dot = full.rfind('.');
             if (dot != std::string::npos && dot > 0 && dot + 1 < full.size()) {
                 c.layer = full.substr(0, dot);

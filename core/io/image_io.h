@@ -4,6 +4,7 @@
 
 #include "core/math/math.h"
 
+#include <cstdint>
 #include <map>
 #include <stdexcept>
 #include <string>
@@ -49,8 +50,10 @@ void writePng(const std::string& path, const ImageSet& images, const ColorConfig
               float exposureStops = 0.f);
 
 // Reads an EXR written by writeExr (or any image OIIO reads) back into an ImageSet,
-// grouping channels into AOVs by their "layer." prefix (unprefixed RGB(A) -> "beauty").
-ImageSet readImageSet(const std::string& path);
+// grouping channels into AOVs by their "layer." prefix (unprefixed RGB(A) -> "beauty"). A header declaring more than
+// maxPixels pixels (the renderer's own maximum by default; a caller may lower it, as fuzz_image does) is refused.
+constexpr int64_t kMaxImageSetPixels = int64_t(1) << 26;
+ImageSet readImageSet(const std::string& path, int64_t maxPixels = kMaxImageSetPixels);
 
 struct CompareResult {
     double rmse = 0, mae = 0, psnr = 0;  // over all pixels and channels of the compared AOV

@@ -61,7 +61,7 @@ void writePng(const std::string& path, const ImageSet& images, const ColorConfig
               float exposureStops) {
     table().writePng(path, images, color, view, exposureStops);
 }
-ImageSet readImageSet(const std::string& path) { return table().readImageSet(path); }
+ImageSet readImageSet(const std::string& path, int64_t maxPixels) { return table().readImageSet(path, maxPixels); }
 CompareResult compareImages(const std::string& a, const std::string& b, const std::string& aov, const std::string& diff) {
     return table().compareImages(a, b, aov, diff);
 }

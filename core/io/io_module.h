@@ -23,7 +23,7 @@ struct Table {
     const AovBuffer* (*imageSetFind)(const ImageSet&, const std::string&);
     void (*writeExr)(const std::string&, const ImageSet&, const ColorConfig&);
     void (*writePng)(const std::string&, const ImageSet&, const ColorConfig&, const std::string&, float);
-    ImageSet (*readImageSet)(const std::string&);
+    ImageSet (*readImageSet)(const std::string&, int64_t);
     CompareResult (*compareImages)(const std::string&, const std::string&, const std::string&, const std::string&);
     void (*writeFileAtomic)(const std::string&, const std::string&);
     std::string (*createTempFileNear)(const std::string&);
