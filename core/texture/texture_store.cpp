@@ -236,8 +236,8 @@ TextureHandle TextureStore::load(const std::string& path, const std::string& col
         if (!in) throw TextureError("cannot read texture '" + path + "': " + OIIO::geterror());
         spec = in->spec();
         checkTextureDimensions(path, spec, I.maxSide);  // before the pixels: a 300 KB file may claim 100000x100000
+        // checkTextureDimensions has refused volumes and more than 64 channels; an empty image is left.
         if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0) throw TextureError("texture '" + path + "' is empty");
-        if (spec.depth > 1) throw TextureError("texture '" + path + "': volume textures are not supported");
         pixels.resize(size_t(spec.width) * size_t(spec.height) * size_t(spec.nchannels));
         if (!readPixelsAsFloat(*in, 0, pixels.data()))
             throw TextureError("cannot read texture '" + path + "': " + in->geterror());
