@@ -331,17 +331,20 @@ std::string imageHeaderProblem(const std::string& path) {
     return "";
 }
 
-std::string decodedSizeProblem(const std::string& path, const OIIO::ImageSpec& spec) {
+std::string decodedSizeProblem(const std::string& path, const OIIO::ImageSpec& spec, uint64_t claimedBefore) {
     const uint64_t w = uint64_t(std::max(spec.width, 0)), h = uint64_t(std::max(spec.height, 0));
     const uint64_t c = uint64_t(std::max(spec.nchannels, 0)), d = uint64_t(std::max(spec.depth, 1));
     std::error_code ec;
     const uint64_t fileBytes = fs::file_size(path, ec);
     // Each factor is below 2^31 and the callers bound depth and channels first: no overflow.
-    const uint64_t decodedBytes = w * h * d * c * uint64_t(std::max<size_t>(spec.format.size(), 1));
+    const uint64_t partBytes = w * h * d * c * uint64_t(std::max<size_t>(spec.format.size(), 1));
+    const uint64_t decodedBytes = claimedBefore + partBytes;
     constexpr uint64_t kMaxCompression = 2048, kAlwaysDecodable = uint64_t(256) << 20;
     if (ec || decodedBytes <= kAlwaysDecodable || decodedBytes / kMaxCompression <= fileBytes) return "";
     return "its header claims " + std::to_string(w) + "x" + std::to_string(h) + " pixels, " + std::to_string(c) +
-           " channels (" + formatBytes(decodedBytes) + " decoded) from a file of " + formatBytes(fileBytes) +
+           " channels (" + formatBytes(partBytes) + " decoded" +
+           (claimedBefore ? ", " + formatBytes(decodedBytes) + " with the parts before it" : std::string()) +
+           ") from a file of " + formatBytes(fileBytes) +
            ", more than any image compression gives (" + std::to_string(kMaxCompression) +
            ":1): the file is truncated or damaged";
 }
@@ -388,8 +391,13 @@ ImageSet readImageSet(const std::string& path, int64_t maxPixels) {
     std::vector<Chan> chans;
     std::vector<std::string> fileOrder;  // full channel names, as written (if recorded)
 
+    // Pass 1: every part's header, bounded before any pixel is allocated. The claims add up over the parts: a multi-part
+    // file of parts that each claim 128 MiB passed a per-part check, however many parts it declared, and fuzz_image's
+    // resident memory grew past a gigabyte on such files.
+    std::vector<int> parts;  // the subimages of the first part's size, read in pass 2
+    uint64_t claimedBytes = 0, floatBytes = 0, largestNative = 0;
     for (int sub = 0; in->seek_subimage(sub, 0); ++sub) {
-        OIIO::ImageSpec spec = in->spec();
+        const OIIO::ImageSpec& spec = in->spec();
         if (sub == 0) {
             set.width = spec.width;
             set.height = spec.height;
@@ -426,8 +434,25 @@ ImageSet readImageSet(const std::string& path, int64_t maxPixels) {
                                " channels, beyond the limit of " +
                                (maxPixels == kMaxImageSetPixels ? std::string("2^26") : std::to_string(maxPixels)) +
                                " pixels and 1024 channels");
-        if (const std::string problem = decodedSizeProblem(path, spec); !problem.empty())
+        if (const std::string problem = decodedSizeProblem(path, spec, claimedBytes); !problem.empty())
             throw ImageIoError("cannot read '" + path + "': " + problem);
+        const uint64_t values = uint64_t(spec.width) * uint64_t(spec.height) * uint64_t(spec.nchannels);
+        claimedBytes += values * uint64_t(std::max<size_t>(spec.format.size(), 1));
+        floatBytes += values * sizeof(float);
+        largestNative = std::max(largestNative, values * uint64_t(spec.format.size()));
+        parts.push_back(sub);
+    }
+    // Every part's floats stay until the channels are gathered, and one part's native pixels are held while it converts.
+    const MemoryBudget budget = memoryBudget();
+    if (floatBytes + largestNative > budget.availableBytes)
+        throw ImageIoError("cannot read '" + path + "': its " + std::to_string(parts.size()) + " part(s) need about " +
+                           formatBytes(floatBytes + largestNative) + " to read, but " +
+                           formatBytes(budget.availableBytes) + " are left under " + budget.limitedBy);
+
+    // Pass 2: the pixels.
+    for (const int sub : parts) {
+        if (!in->seek_subimage(sub, 0)) throw ImageIoError("cannot read image '" + path + "': " + in->geterror());
+        const OIIO::ImageSpec spec = in->spec();
         std::string partName = sub > 0 ? std::string(spec.get_string_attribute("name")) : std::string();
         buffers.emplace_back(new float[size_t(spec.width) * size_t(spec.height) * size_t(spec.nchannels)]);
         if (!readPixelsAsFloat(*in, sub, buffers.back().get()))

@@ -4,6 +4,7 @@
 
 #include <OpenImageIO/imageio.h>
 
+#include <cstdint>
 #include <string>
 
 namespace specula {
@@ -19,8 +20,9 @@ std::string imageHeaderProblem(const std::string& path);
 // more than its size allows: deflate (PNG, EXR zip) stops near 1032:1, and RLE, JPEG and the other EXR codecs below
 // that. A header that claims more (a 111-byte TGA claiming 8294x28461 RGBA: 3.5 GiB of floats, found by fuzz_image) is
 // refused before its pixels are allocated; images under 256 MiB decoded pass whatever their size, so highly
-// compressible images of ordinary size still load.
-std::string decodedSizeProblem(const std::string& path, const OIIO::ImageSpec& spec);
+// compressible images of ordinary size still load. claimedBefore: what the file's earlier parts claim (multi-part
+// files), so that the allowance holds for the whole file, not for each part.
+std::string decodedSizeProblem(const std::string& path, const OIIO::ImageSpec& spec, uint64_t claimedBefore = 0);
 
 // Reads subimage `subimage` (MIP level 0, every channel) of `in` into `out` as width × height × channels contiguous
 // floats, converted from the file's own format as OpenImageIO's converting read would. Why not read_image(FLOAT)
