@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Renders the glint showcase scenes of examples/showcase/ (issue 11 item 6; the P-NDF ones of issue 12 item 9) with the technique and with the naive
+"""Renders the showcase scenes of examples/showcase/ (glints: issue 11 item 6; P-NDF: issue 12 item 9; filtered GGX and LEAN) with the technique and with the naive
 version beside it, writes the pictures to docs/gallery/ (JPEG, 960x540) and the render times into the generated
 block of docs/gallery.md. Equal render time where the technique costs more per sample (the naive variant then gets
 the spp that takes as long, measured on a quarter-size probe).
@@ -72,6 +72,38 @@ def plain_normal_mapping(scene):
     return s
 
 
+def unfiltered_ggx(scene):
+    """The naive filtered GGX: every bsdf.ggx_filtered with filter none, i.e. plain normal-mapped GGX."""
+    s = copy.deepcopy(scene)
+    for m in s["materials"].values():
+        for n in m["nodes"].values():
+            if n.get("type") == "bsdf.ggx_filtered":
+                n.setdefault("inputs", {})["filter"] = "none"
+    return s
+
+
+def mip_normals(scene):
+    """The naive LEAN mapping: every texture.lean becomes the same map read as MIP-filtered normals (texture.image raw,
+    same uv and footprint -> texture.normal_map), which feeds the lobe's normal; the lobe loses the slope moments."""
+    s = copy.deepcopy(scene)
+    for m in s["materials"].values():
+        nodes = m["nodes"]
+        for nid, n in list(nodes.items()):
+            if n.get("type") != "texture.lean":
+                continue
+            inp = n.get("inputs", {})
+            look = {k: inp[k] for k in ("uv", "duvdx", "duvdy") if k in inp}
+            nodes[nid] = {"type": "texture.image", "inputs": dict(file=inp["file"], colorspace="raw", **look)}
+            nodes[f"{nid}_nm"] = {"type": "texture.normal_map", "inputs": {"color": f"@{nid}.color"}}
+            for other in nodes.values():
+                oin = other.get("inputs", {})
+                if oin.get("slope") == f"@{nid}.slope" or oin.get("covariance") == f"@{nid}.covariance":
+                    oin.pop("slope", None)
+                    oin.pop("covariance", None)
+                    oin["normal"] = f"@{nid}_nm.normal"
+    return s
+
+
 # name, scene file, (technique label, naive label, naive transform, equal time?)
 SHOWCASES = [
     ("carpaint", "glint-carpaint.json", "glints + GGAA under a clear coat", "GGAA off", glint_ggaa_off, False),
@@ -85,6 +117,9 @@ SHOWCASES = [
      plain_normal_mapping, False),
     ("pndf-kettle", "pndf-kettle.json", "P-NDF glints (bsdf.glint_pndf)", "plain normal mapping, GGX roughness 0.05",
      plain_normal_mapping, False),
+    ("filtered-ggx", "filtered-ggx-hall.json", "filtered GGX (projected_approx)", "filter none (normal-mapped GGX)",
+     unfiltered_ggx, True),
+    ("lean", "lean-brushed.json", "LEAN mapping with slope correlation", "MIP-filtered normals", mip_normals, True),
 ]
 
 BEGIN, END = "<!-- render_showcase: begin -->", "<!-- render_showcase: end -->"

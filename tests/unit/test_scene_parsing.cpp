@@ -122,7 +122,8 @@ std::vector<InvalidCase> invalidCases() {
 TEST(SceneParsing, ExamplesLoad) {
     for (const char* name : {"examples/demo.json", "examples/metals.json", "examples/cornell.json", "examples/anchor-sphere.json",
                              "examples/showcase/glint-snow.json", "examples/showcase/glint-glitter.json",
-                             "examples/showcase/glint-carpaint.json"}) {
+                             "examples/showcase/glint-carpaint.json", "examples/showcase/filtered-ggx-hall.json",
+                             "examples/showcase/lean-brushed.json"}) {
         Scene s = loadScene(test::sourcePath(name));
         EXPECT_GT(s.shapes.size(), 1u) << name;
         EXPECT_GE(s.lights.size(), 1u) << name;
