@@ -289,7 +289,7 @@ void writePng(const std::string& path, const ImageSet& images, const ColorConfig
 
 // ---- reading --------------------------------------------------------------------------------------
 
-std::string imageHeaderProblem(const std::string& path) {
+std::string imageHeaderProblem(const std::string& path, int64_t maxSide, int64_t maxPixels) {
     std::ifstream f(path, std::ios::binary);
     unsigned char head[8];
     if (!f.read(reinterpret_cast<char*>(head), 8)) return "";  // unreadable or short: the decoder says so
@@ -326,6 +326,24 @@ std::string imageHeaderProblem(const std::string& path) {
         if (size < 0 || uint64_t(size) > left)
             return "its OpenEXR header's attribute '" + name + "' (" + type + ") declares " + std::to_string(size) +
                    " bytes, but only " + std::to_string(left) + " bytes follow in the file";
+        if (name == "dataWindow" && type == "box2i" && size == 16) {
+            // OpenEXR sizes its line buffers by the data window when it opens the file (a 215-byte file declaring
+            // 16794113x1 pixels had it allocate about 1.6 GB of ZIP line buffers), so the caller's size limits are
+            // applied here, before it.
+            unsigned char w[16];
+            if (!f.read(reinterpret_cast<char*>(w), 16)) return "";
+            auto at = [&](int i) {
+                return int64_t(int32_t(uint32_t(w[i]) | uint32_t(w[i + 1]) << 8 | uint32_t(w[i + 2]) << 16 |
+                                       uint32_t(w[i + 3]) << 24));
+            };
+            const int64_t width = at(8) - at(0) + 1, height = at(12) - at(4) + 1;  // each within ±2^32: no overflow
+            if (width > 0 && height > 0 && (width > maxSide || height > maxSide || width > maxPixels / height))
+                return "its OpenEXR header declares " + std::to_string(width) + "x" + std::to_string(height) +
+                       " pixels (dataWindow), beyond the limit of " +
+                       (maxSide < maxPixels ? std::to_string(maxSide) + " pixels a side"
+                                            : std::to_string(maxPixels) + " pixels");
+            continue;
+        }
         f.seekg(std::streamoff(size), std::ios::cur);
     }
     return "";
@@ -374,7 +392,7 @@ ImageSet readImageSet(const std::string& path, int64_t maxPixels) {
     if (!fs::exists(path, ec)) throw ImageIoError("image file not found: '" + path + "'");
     OIIO::ImageSpec config;
     config.attribute("oiio:UnassociatedAlpha", 1);  // the file's values, unaltered
-    if (const std::string problem = imageHeaderProblem(path); !problem.empty())
+    if (const std::string problem = imageHeaderProblem(path, maxPixels, maxPixels); !problem.empty())
         throw ImageIoError("cannot read image '" + path + "': " + problem);
     auto in = OIIO::ImageInput::open(path, &config);
     if (!in) throw ImageIoError("cannot read image '" + path + "': " + OIIO::geterror());

@@ -13,8 +13,9 @@ namespace specula {
 // header reader allocates every attribute at the size the attribute declares before reading it (a 200-byte file
 // declaring a 2 GiB attribute allocates 2 GiB; under ASan that poisoning was most of fuzz_image's time). The walk
 // reads each header's attribute names, types and sizes (multi-part files included) and requires every size to fit in
-// the bytes left in the file.
-std::string imageHeaderProblem(const std::string& path);
+// the bytes left in the file. OpenEXR also sizes its line buffers by the data window when it opens a file, so every
+// header's dataWindow must fit the caller's limits: at most maxSide pixels a side and maxPixels pixels.
+std::string imageHeaderProblem(const std::string& path, int64_t maxSide, int64_t maxPixels);
 
 // Why a header's claimed size cannot be what the file decodes to, or "" when it can. A file cannot decode to much
 // more than its size allows: deflate (PNG, EXR zip) stops near 1032:1, and RLE, JPEG and the other EXR codecs below

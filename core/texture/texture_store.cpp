@@ -230,7 +230,8 @@ TextureHandle TextureStore::load(const std::string& path, const std::string& col
         }
         OIIO::ImageSpec readConfig;
         readConfig.attribute("oiio:UnassociatedAlpha", 1);  // keep straight alpha: colour is converted unpremultiplied
-        if (const std::string problem = imageHeaderProblem(path); !problem.empty())
+        if (const std::string problem = imageHeaderProblem(path, I.maxSide, int64_t(I.maxSide) * I.maxSide);
+            !problem.empty())
             throw TextureInputError("texture '" + path + "': " + problem);
         auto in = OIIO::ImageInput::open(path, &readConfig);
         if (!in) throw TextureError("cannot read texture '" + path + "': " + OIIO::geterror());
