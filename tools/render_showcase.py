@@ -22,14 +22,19 @@ from specula_validation.render import Renderer, rebase_files, tiled_uv_nodes  # 
 SHOW = os.path.join(ROOT, "examples", "showcase")
 
 
-def glint_ggaa_off(scene):
-    """The naive glints: every bsdf.glint without geometric glint anti-aliasing (C21 §4 off)."""
+def with_input(scene, node_type, name, value):
+    """A copy of the scene in which every node of node_type has its input `name` set to value."""
     s = copy.deepcopy(scene)
     for m in s["materials"].values():
         for n in m["nodes"].values():
-            if n.get("type") == "bsdf.glint":
-                n.setdefault("inputs", {})["ggaa"] = "off"
+            if n.get("type") == node_type:
+                n.setdefault("inputs", {})[name] = value
     return s
+
+
+def glint_ggaa_off(scene):
+    """The naive glints: every bsdf.glint without geometric glint anti-aliasing (C21 §4 off)."""
+    return with_input(scene, "bsdf.glint", "ggaa", "off")
 
 
 def sampled_lights(scene):
@@ -74,12 +79,7 @@ def plain_normal_mapping(scene):
 
 def unfiltered_ggx(scene):
     """The naive filtered GGX: every bsdf.ggx_filtered with filter none, i.e. plain normal-mapped GGX."""
-    s = copy.deepcopy(scene)
-    for m in s["materials"].values():
-        for n in m["nodes"].values():
-            if n.get("type") == "bsdf.ggx_filtered":
-                n.setdefault("inputs", {})["filter"] = "none"
-    return s
+    return with_input(scene, "bsdf.ggx_filtered", "filter", "none")
 
 
 def mip_normals(scene):
