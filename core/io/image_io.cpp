@@ -328,8 +328,8 @@ std::string imageHeaderProblem(const std::string& path, int64_t maxSide, int64_t
                    " bytes, but only " + std::to_string(left) + " bytes follow in the file";
         if (name == "dataWindow" && type == "box2i" && size == 16) {
             // OpenEXR sizes its line buffers by the data window when it opens the file (a 215-byte file declaring
-            // 16794113x1 pixels had it allocate about 1.6 GB of ZIP line buffers), so the caller's size limits are
-            // applied here, before it.
+            // 16794113x1 half RGB pixels asks for 16 lines of 100 MB each, by our count, for ZIP), so the caller's
+            // size limits are applied here, before it.
             unsigned char w[16];
             if (!f.read(reinterpret_cast<char*>(w), 16)) return "";
             auto at = [&](int i) {
