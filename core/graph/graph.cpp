@@ -402,6 +402,7 @@ Program Program::compile(const GraphDesc& g, const std::vector<std::pair<int, in
                     if (!constNode[v.srcNode]) allConst = false, dynamicPorts |= 1u << k;
                     break;
                 case InputValue::Kind::Binding: {
+                    if (isDerivativeBinding(p.binding)) prog.needsDerivatives_ = true;
                     auto it = bindingRegs.find(p.binding);
                     if (it == bindingRegs.end()) {
                         uint16_t r = alloc(typeWidth(bindingType(p.binding)));
@@ -464,6 +465,7 @@ Program Program::compile(const GraphDesc& g, const std::vector<std::pair<int, in
                 ++prog.slots_;
             }
         if (spec.has(kEmissive)) prog.emissive_ = true;
+        if (spec.has(kNeedsDerivatives)) prog.needsDerivatives_ = true;
         if (spec.params) prog.preRead(ins, *spec.params, dynamicPorts);
         // A shade may skip copying the register template when no instruction reads a register it did not write:
         // every port of every node pre-read or taken from the shading point (closure pool indices are read from the

@@ -74,6 +74,8 @@ public:
     size_t registerCount() const { return tmpl_.size(); }
     size_t closureSlots() const { return slots_; }
     bool emissive() const { return emissive_; }
+    // Some live node reads screen-space differentials (kNeedsDerivatives) or a port bound to one (Material::needsDerivatives).
+    bool needsDerivatives() const { return needsDerivatives_; }
     // What a shade does besides running the nodes: geometry bindings loaded into registers (those not read from the
     // shading point directly, Instr::boundPorts), and whether it copies the register template first.
     size_t prologueLoads() const { return prologue_.size(); }
@@ -97,6 +99,7 @@ private:
     int outSlot_ = -1;
     size_t slots_ = 0, folded_ = 0;
     bool emissive_ = false;
+    bool needsDerivatives_ = false;
     // Whether a shade copies the template: false only when every instruction has a parameter struct and every port that
     // varies is a direct binding (a conservative test: ports fed by other nodes also set it; see compile).
     bool readsTemplate_ = false;

@@ -31,6 +31,7 @@ public:
         : desc_(std::move(desc)), program_(std::move(program)) {}
     void shade(const ShadingPoint& sp, ScratchArena& arena, Closure& out, Color3* emission = nullptr) const override;
     bool isEmissive() const override { return program_.emissive(); }
+    bool needsDerivatives() const override { return program_.needsDerivatives(); }
     const graph::GraphDesc& desc() const { return desc_; }
     const graph::Program& program() const { return program_; }
 

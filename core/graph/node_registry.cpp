@@ -80,6 +80,29 @@ const char* bindingGlsl(GeomBinding b) {
     return "";
 }
 
+bool isDerivativeBinding(GeomBinding b) {
+    switch (b) {
+        case GeomBinding::DUVDX:
+        case GeomBinding::DUVDY:
+        case GeomBinding::DNDX:
+        case GeomBinding::DNDY:
+        case GeomBinding::PixelDUVDX:
+        case GeomBinding::PixelDUVDY:
+        case GeomBinding::PixelDNDX:
+        case GeomBinding::PixelDNDY: return true;
+        case GeomBinding::None:
+        case GeomBinding::UV:
+        case GeomBinding::P:
+        case GeomBinding::N:
+        case GeomBinding::Ng:
+        case GeomBinding::T:
+        case GeomBinding::TSign:
+        case GeomBinding::NdotV:
+        case GeomBinding::FrontFacing: return false;
+    }
+    return true;
+}
+
 void loadBinding(GeomBinding b, const ShadingPoint& sp, float* d) {
     auto v3 = [d](const Vec3& v) { d[0] = v.x, d[1] = v.y, d[2] = v.z; };
     auto v2 = [d](const Vec2& v) { d[0] = v.x, d[1] = v.y; };

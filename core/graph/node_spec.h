@@ -48,6 +48,8 @@ enum class GeomBinding : uint8_t {
 const char* bindingName(GeomBinding b);
 TypeDesc bindingType(GeomBinding b);
 const char* bindingGlsl(GeomBinding b);
+// Whether the binding is a screen-space differential (its value needs the shading point's derivatives).
+bool isDerivativeBinding(GeomBinding b);
 // Writes the binding's value (typeWidth(bindingType(b)) floats) for a shading point.
 void loadBinding(GeomBinding b, const ShadingPoint& sp, float* dst);
 

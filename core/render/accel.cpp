@@ -200,7 +200,7 @@ bool Accel::extrapolate(const Ray& ray, const Hit& on, Hit& out) const {
     return true;
 }
 
-ShadingPoint Accel::shadingPoint(const RayDifferential& ray, const Hit& hit) const {
+ShadingPoint Accel::shadingPoint(const RayDifferential& ray, const Hit& hit, bool derivatives) const {
     const ShapeInstance& sh = scene_.shapes[hit.shape];
     const TriangleMesh& m = sh.mesh;
     const glm::uvec3 idx = m.indices[hit.prim];
@@ -233,7 +233,7 @@ ShadingPoint Accel::shadingPoint(const RayDifferential& ray, const Hit& hit) con
         float len = glm::length(n);
         sp.n = len > 0.f ? n / len : sp.ng;
         Vec3 dndu, dndv;
-        if (triangleUvPartials(uv, n0, n1, n2, dndu, dndv) && len > 0.f) {
+        if (derivatives && triangleUvPartials(uv, n0, n1, n2, dndu, dndv) && len > 0.f) {
             // derivative of the normalised interpolated normal
             sp.dndu = (dndu - sp.n * glm::dot(sp.n, dndu)) / len;
             sp.dndv = (dndv - sp.n * glm::dot(sp.n, dndv)) / len;
@@ -275,8 +275,10 @@ ShadingPoint Accel::shadingPoint(const RayDifferential& ray, const Hit& hit) con
         sp.dpdu = lin * g.dpdu;
         sp.dpdv = lin * g.dpdv;
         sp.n = glm::normalize(sh.normalToWorld * g.n);
-        sp.dndu = transformNormalDerivative(sh.normalToWorld, g.n, g.dndu);
-        sp.dndv = transformNormalDerivative(sh.normalToWorld, g.n, g.dndv);
+        if (derivatives) {
+            sp.dndu = transformNormalDerivative(sh.normalToWorld, g.n, g.dndu);
+            sp.dndv = transformNormalDerivative(sh.normalToWorld, g.n, g.dndv);
+        }
         tangent = sp.dpdu;
         handed = glm::dot(glm::cross(sp.n, sp.dpdu), sp.dpdv) < 0.f ? -1.f : 1.f;
         if (glm::dot(sp.ng, sp.n) < 0.f) sp.ng = -sp.ng;  // keep the triangle normal on the exact normal's side
@@ -295,7 +297,7 @@ ShadingPoint Accel::shadingPoint(const RayDifferential& ray, const Hit& hit) con
     sp.tangent = Vec4(glm::normalize(tangent), handed);
     sp.frame = Frame::fromNormalTangent(sp.n, Vec3(sp.tangent));
 
-    if (ray.hasDifferentials) {
+    if (ray.hasDifferentials && derivatives) {
         // Tangent plane of the surface the shading point lies on: the exact one for analytic shapes.
         const Vec3 planeN = sh.surface ? sp.n : sp.ng;
         float d = glm::dot(planeN, sp.p);

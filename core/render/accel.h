@@ -46,7 +46,9 @@ public:
     // Builds the shading point of a hit; if the ray carries differentials, computes dp/dx, dp/dy,
     // duv, dn and dwo (pbrt-v4 SurfaceInteraction::ComputeDifferentials). The geometric and shading
     // normals are flipped to face the ray's origin side.
-    ShadingPoint shadingPoint(const RayDifferential& ray, const Hit& hit) const;
+    // derivatives = false (a material that reads none, Material::needsDerivatives) skips dn/du, dn/dv and the screen
+    // differentials: hasDifferentials stays false; everything else, the position included, is the same.
+    ShadingPoint shadingPoint(const RayDifferential& ray, const Hit& hit, bool derivatives = true) const;
     // The ray against the plane of triangle (on.shape, on.prim), with barycentrics extrapolated beyond the triangle:
     // what a GPU helper invocation of that triangle computes for a neighbouring pixel of its 2x2 quad. False when
     // the ray is parallel to the plane or meets it behind the origin.

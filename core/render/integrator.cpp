@@ -26,7 +26,13 @@ Integrator::Integrator(const Scene& scene, const Accel& accel)
       ltcLights_(scene.render.areaLights == AreaLightMode::Ltc),
       ltcMaxDepth_(scene.render.ltcMaxDepth),
       ltcShadowRays_(std::max(1, scene.render.ltcShadowRays)),
-      shadows_(std::make_unique<RasterShadowState>()) {}
+      shadows_(std::make_unique<RasterShadowState>()) {
+    derivatives_.reserve(scene.shapes.size());
+    for (const ShapeInstance& sh : scene.shapes) {
+        const Material* m = sh.material >= 0 ? scene.materials[size_t(sh.material)].get() : nullptr;
+        derivatives_.push_back(m ? uint8_t(m->needsDerivatives()) : uint8_t(1));
+    }
+}
 
 Color3 Integrator::environment(const Vec3& dir) const {
     Color3 L(0.f);
@@ -133,7 +139,7 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
         out.beauty = environment(glm::normalize(cameraRay.d));
         return out;
     }
-    ShadingPoint sp = accel_.shadingPoint(cameraRay, hit);
+    ShadingPoint sp = accel_.shadingPoint(cameraRay, hit, derivatives_[hit.shape]);
     {
         const ShapeInstance& sh = scene_.shapes[hit.shape];
         out.depth = hit.t * glm::dot(cameraRay.d, scene_.camera.lookAt - scene_.camera.position) /
@@ -160,7 +166,7 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
         sampler.setDimension(firstBounceDim + uint32_t(depth) * dimsPerBounce_);
         arena.reset();
         sp.depth = depth;
-        if (depth == 0 && quad) {
+        if (depth == 0 && quad && derivatives_[sp.shapeId]) {
             // GPU 2×2-quad emulation (filtered-ggx.md §5.2): shade the partners' pixel-centre hits (their lobes are
             // dropped with this vertex's arena) and replace the ray differentials by fine one-sided differences.
             for (int k = 0; k < 2; ++k) {
@@ -423,14 +429,17 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
         prevDir = wiW;
         prevHitT = h.t;
         prevPrim = h.prim;
-        sp = accel_.shadingPoint(next, h);
-        // Secondary vertices: the camera's footprint at that point (pbrt-v4's approximation), so filtered lobes, glints
-        // and textures seen in mirrors or through bounces get a footprint; dwo is not differentiated there.
-        camera_.approximateDpDxy(sp.p, sp.n, diffScale_, sp.dpdx, sp.dpdy);
-        surfaceDifferentials(sp);
-        sp.dwodx = sp.dwody = Vec3(0.f);
-        sp.differentialScale = Vec2(diffScale_);
-        sp.hasDifferentials = true;
+        const bool derivatives = derivatives_[h.shape];
+        sp = accel_.shadingPoint(next, h, derivatives);
+        if (derivatives) {
+            // Secondary vertices: the camera's footprint at that point (pbrt-v4's approximation), so filtered lobes,
+            // glints and textures seen in mirrors or through bounces get a footprint; dwo is not differentiated there.
+            camera_.approximateDpDxy(sp.p, sp.n, diffScale_, sp.dpdx, sp.dpdy);
+            surfaceDifferentials(sp);
+            sp.dwodx = sp.dwody = Vec3(0.f);
+            sp.differentialScale = Vec2(diffScale_);
+            sp.hasDifferentials = true;
+        }
     }
     out.beauty = emitted + out.diffuse + out.specular;
     return out;

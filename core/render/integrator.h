@@ -83,6 +83,9 @@ private:
     int ltcMaxDepth_;           // ... at path vertices up to this depth (0: camera hits), sampled deeper
     int ltcShadowRays_;         // shadow rays per analytic lobe and light (render.ltc_shadow_rays)
     std::unique_ptr<RasterShadowState> shadows_;
+    // Per shape: whether its material reads differentials (Material::needsDerivatives; light geometry: true), so that
+    // shading points of the others are built without them.
+    std::vector<uint8_t> derivatives_;
 };
 
 }  // namespace specula

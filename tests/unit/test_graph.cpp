@@ -376,3 +376,21 @@ TEST(GraphMaterial, BindingsAreReadFromTheShadingPointAndTheTemplateCopiedOnlyWh
         }
     }
 }
+
+// Material::needsDerivatives: true when a live node reads differentials (kNeedsDerivatives) or a port is bound to one
+// (texture.normal_map's duvdx and surface_dndx), so the renderer builds them only for such materials (issue 15).
+TEST(GraphMaterial, NeedsDerivativesOnlyWhenANodeOrABindingReadsThem) {
+    json ggx = {{"g", {{"type", "bsdf.ggx"}, {"inputs", {{"roughness", 0.3}}}}},
+                {"d", {{"type", "bsdf.diffuse"}}},
+                {"sum", {{"type", "closure.add"}, {"inputs", {{"a", "@g.bsdf"}, {"b", "@d.bsdf"}}}}}};
+    EXPECT_FALSE(load({{"nodes", ggx}, {"output", "@sum.bsdf"}})->needsDerivatives());
+    json filtered = {{"g", {{"type", "bsdf.ggx_filtered"}}}};
+    EXPECT_TRUE(load({{"nodes", filtered}, {"output", "@g.bsdf"}})->needsDerivatives());
+    json mapped = {{"nm", {{"type", "texture.normal_map"}, {"inputs", {{"color", {0.6, 0.5, 0.9}}}}}},
+                   {"g", {{"type", "bsdf.ggx"}, {"inputs", {{"normal", "@nm.normal"}}}}}};
+    EXPECT_TRUE(load({{"nodes", mapped}, {"output", "@g.bsdf"}})->needsDerivatives());
+    // A node that is not live does not count.
+    json unused = ggx;
+    unused["f"] = {{"type", "bsdf.ggx_filtered"}};
+    EXPECT_FALSE(load({{"nodes", unused}, {"output", "@sum.bsdf"}})->needsDerivatives());
+}

@@ -598,3 +598,77 @@ TEST(SecondaryDifferentials, PathVerticesAfterTheFirstGetAFootprint) {
     EXPECT_GT(probe->secondary.load(), 50);
     EXPECT_EQ(probe->withFootprint.load(), probe->secondary.load());
 }
+
+namespace {
+// Forwards to another material but claims to read differentials (Material::needsDerivatives), and counts the shading
+// points that arrive with them.
+class DerivativeClaim final : public Material {
+public:
+    explicit DerivativeClaim(std::shared_ptr<Material> inner) : inner_(std::move(inner)) {}
+    mutable std::atomic<int> shaded{0}, withDifferentials{0};
+    void shade(const ShadingPoint& sp, ScratchArena& arena, Closure& out, Color3* emission) const override {
+        ++shaded;
+        if (sp.hasDifferentials) ++withDifferentials;
+        inner_->shade(sp, arena, out, emission);
+    }
+    bool needsDerivatives() const override { return true; }
+
+private:
+    std::shared_ptr<Material> inner_;
+};
+}  // namespace
+
+// Materials that read no differentials get shading points without them (issue 15): the closure, and so the image, is
+// the same bits as with them; a material that asks for them still gets them at every vertex.
+TEST(SecondaryDifferentials, SkippedOnlyForMaterialsThatReadNone) {
+    Scene s = loadScene(test::sourcePath("examples/anchor-sphere.json"));
+    s.render.width = 64;
+    s.render.height = 48;
+    s.render.spp = 4;
+    for (const auto& m : s.materials) EXPECT_FALSE(m->needsDerivatives()) << m->name();
+    RenderOutput skipped = renderScene(s);
+    std::vector<std::shared_ptr<DerivativeClaim>> claims;
+    for (auto& m : s.materials) {
+        claims.push_back(std::make_shared<DerivativeClaim>(m));
+        m = claims.back();
+    }
+    RenderOutput built = renderScene(s);
+    ASSERT_EQ(skipped.images.aovs.size(), built.images.aovs.size());
+    for (size_t i = 0; i < built.images.aovs.size(); ++i) {
+        const auto& pa = skipped.images.aovs[i].pixels;
+        const auto& pb = built.images.aovs[i].pixels;
+        ASSERT_EQ(pa.size(), pb.size());
+        EXPECT_EQ(std::memcmp(pa.data(), pb.data(), pa.size() * sizeof(float)), 0) << built.images.aovs[i].name;
+    }
+    int shaded = 0;
+    for (const auto& c : claims) {
+        shaded += c->shaded.load();
+        EXPECT_EQ(c->withDifferentials.load(), c->shaded.load()) << c->name();
+    }
+    EXPECT_GT(shaded, 64 * 48 * 4 / 2);  // camera hits (a few rays miss) and their bounces
+
+    // The shading point itself: the same geometry with and without derivatives, on an analytic sphere and a quad.
+    Accel accel(s);
+    PerspectiveCamera cam(s.camera, s.render.width, s.render.height);
+    int compared = 0;
+    for (int y = 0; y < s.render.height; y += 3)
+        for (int x = 0; x < s.render.width; x += 3) {
+            RayDifferential r = cam.generateRay(x + 0.5f, y + 0.5f, Vec2(0.5f));
+            Hit h;
+            if (!accel.intersect(r, h)) continue;
+            ShadingPoint with = accel.shadingPoint(r, h, true), without = accel.shadingPoint(r, h, false);
+            EXPECT_TRUE(with.hasDifferentials);
+            EXPECT_FALSE(without.hasDifferentials);
+            for (int c = 0; c < 3; ++c) {
+                EXPECT_EQ(with.p[c], without.p[c]);
+                EXPECT_EQ(with.n[c], without.n[c]);
+                EXPECT_EQ(with.ng[c], without.ng[c]);
+                EXPECT_EQ(with.dpdu[c], without.dpdu[c]);
+                EXPECT_EQ(with.frame.t[c], without.frame.t[c]);
+                EXPECT_EQ(with.tangent[c], without.tangent[c]);
+            }
+            EXPECT_EQ(with.uv, without.uv);
+            ++compared;
+        }
+    EXPECT_GT(compared, 100);
+}
