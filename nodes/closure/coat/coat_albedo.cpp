@@ -14,12 +14,12 @@ namespace {
 constexpr double kPiD = 3.14159265358979323846;
 }
 
-float albedoQuadrature(float mu, float alpha, float ior, int n) {
+void albedoQuadrature(float mu, float alpha, const float* iors, int count, int n, float* out) {
     mu = std::clamp(mu, 1e-4f, 1.f);
     alpha = std::max(alpha, ggx::kMinAlpha);
     const Vec3 wo(std::sqrt(std::max(0.f, 1.f - mu * mu)), 0.f, mu);
     const float g1o = ggx::g1(wo, alpha, alpha);
-    double sum = 0.0;
+    std::vector<double> sums(size_t(count), 0.0);
     for (int a = 0; a < n; ++a)
         for (int b = 0; b < n; ++b) {
             // The sampler's disk point has radius √u.x and height √(1 − u.x) (Heitz 2018, Listing 1): both have
@@ -33,9 +33,17 @@ float albedoQuadrature(float mu, float alpha, float ior, int n) {
             const Vec3 wi = ggx::reflect(wo, h);
             if (wi.z <= 0.f) continue;  // reflected below the surface: the lobe is zero there
             // VNDF sampling: f·cos / pdf = F D G2 /(4 μo) · 4 (wo·h) μo / (G1 (wo·h) D) = F G2 / G1 (Heitz 2018, §3).
-            sum += jac * fresnelDielectric(glm::dot(wo, h), ior) * ggx::g2(wo, wi, alpha, alpha) / g1o;
+            // Only F depends on the IOR: the half vector and the masking are shared by every IOR of the call.
+            const float g2 = ggx::g2(wo, wi, alpha, alpha), woh = glm::dot(wo, h);
+            for (int k = 0; k < count; ++k) sums[size_t(k)] += jac * fresnelDielectric(woh, iors[k]) * g2 / g1o;
         }
-    return float(sum / (double(n) * n));
+    for (int k = 0; k < count; ++k) out[k] = float(sums[size_t(k)] / (double(n) * n));
+}
+
+float albedoQuadrature(float mu, float alpha, float ior, int n) {
+    float e = 0.f;
+    albedoQuadrature(mu, alpha, &ior, 1, n, &e);
+    return e;
 }
 
 namespace {
@@ -60,12 +68,15 @@ const std::vector<float>& albedoTable() {
     static std::once_flag once;
     std::call_once(once, [] {
         table.assign(size_t(kMu) * kRough * kF0, 0.f);
-        tbb::parallel_for(0, kRough * kF0, [](int row) {
-            const int j = row % kRough, k = row / kRough;
+        float iors[kF0];
+        for (int k = 0; k < kF0; ++k) iors[k] = iorOfF0(float(k) / (kF0 - 1) * kMaxF0);
+        // One quadrature per (μo, r) node serves all kF0 IORs: 16× fewer visible-normal samples, the same sums.
+        tbb::parallel_for(0, kRough * kMu, [&iors](int node) {
+            const int j = node / kMu, i = node % kMu;
             const float r = float(j) / (kRough - 1);
-            const float ior = iorOfF0(float(k) / (kF0 - 1) * kMaxF0);
-            for (int i = 0; i < kMu; ++i)
-                table[(size_t(k) * kRough + j) * kMu + i] = albedoQuadrature(float(i) / (kMu - 1), r * r, ior, kQuad);
+            float e[kF0];
+            albedoQuadrature(float(i) / (kMu - 1), r * r, iors, kF0, kQuad, e);
+            for (int k = 0; k < kF0; ++k) table[(size_t(k) * kRough + j) * kMu + i] = e[k];
         });
     });
     return table;

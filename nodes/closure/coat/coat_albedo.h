@@ -22,10 +22,13 @@ constexpr int kMu = 32, kRough = 32, kF0 = 16, kQuad = 32;
 constexpr float kMaxF0 = 0.25f;  // η = 3
 constexpr float kMinIor = 1.f, kMaxIor = 3.f;
 
-// The table, built once on first use (thread-safe; ~1.5 s of one core). Index ((k·kRough + j)·kMu + i).
+// The table, built once on first use (thread-safe). Index ((k·kRough + j)·kMu + i).
 const std::vector<float>& albedoTable();
 // One node computed directly (what the table stores): E for μo, α, η by the quadrature above with n × n points.
 float albedoQuadrature(float mu, float alpha, float ior, int n);
+// The same for 'count' IORs at once (out[k] for iors[k], each the same bits as the one-IOR call): the visible normals
+// and the masking do not depend on the IOR, so the table computes them once per (μo, r) node.
+void albedoQuadrature(float mu, float alpha, const float* iors, int count, int n, float* out);
 // Trilinear interpolation of the table at (μo, r, η); μo ≤ 0 gives 0 (the lobe is zero there). The GLSL twin is
 // spc_coat_albedo in coat.glsl (same formula on the texelFetch'ed table).
 float albedo(float mu, float roughness, float ior);
