@@ -8,6 +8,7 @@ cd "$(dirname "$0")/.."
 BUILD=${1:-build}
 OUT=${2:-$(mktemp -d)}
 mkdir -p "$OUT"
+PY=/usr/bin/python3  # Debian's, with python3-numpy (platform.md); a python3 earlier on PATH may lack it
 for b in bench_embree_limit bench_graph bench_filtered_ggx bench_render specula; do
   [ -x "$BUILD/bin/$b" ] || { echo "missing $BUILD/bin/$b: build first (./scripts/setup)"; exit 1; }
 done
@@ -27,11 +28,11 @@ echo "== item 5: filtered GGX per evaluation"
 "$BUILD/bin/bench_filtered_ggx" --benchmark_min_time=0.3 2>/dev/null | tee "$OUT/filtered_ggx.txt" | grep -E "^RATIO"
 
 echo "== item 5: filtered GGX per frame (512x384, 16 spp, min of 3)"
-python3 bench/bench_filtered_ggx_frames.py --specula "$BUILD/bin/specula" --resolution 512x384 --spp 16 --repeat 3 \
+"$PY" bench/bench_filtered_ggx_frames.py --specula "$BUILD/bin/specula" --resolution 512x384 --spp 16 --repeat 3 \
   --json "$OUT/frames.json" | tee "$OUT/frames.txt"
 
 echo "== item 6: threads (anchor scene 512x512, 16 spp, min of 3)"
-python3 bench/bench_scaling.py --specula "$BUILD/bin/specula" --runs 3 --only threads --json "$OUT/scaling.json" \
+"$PY" bench/bench_scaling.py --specula "$BUILD/bin/specula" --runs 3 --only threads --json "$OUT/scaling.json" \
   | tee "$OUT/scaling.txt"
 
 echo "== summary"
