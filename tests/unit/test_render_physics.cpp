@@ -199,6 +199,17 @@ DiffCheck checkDifferentials(const Scene& scene, bool checkNormals) {
     return dc;
 }
 
+// Every AOV of two renders, the same bits.
+void expectSameBits(const ImageSet& a, const ImageSet& b) {
+    ASSERT_EQ(a.aovs.size(), b.aovs.size());
+    for (size_t i = 0; i < a.aovs.size(); ++i) {
+        const auto& pa = a.aovs[i].pixels;
+        const auto& pb = b.aovs[i].pixels;
+        ASSERT_EQ(pa.size(), pb.size());
+        EXPECT_EQ(std::memcmp(pa.data(), pb.data(), pa.size() * sizeof(float)), 0) << a.aovs[i].name;
+    }
+}
+
 std::string diffScene(const std::string& shape) {
     // 512² keeps one-pixel steps small against the torus' minor radius, so that central differences
     // (second-order accurate) are a fair reference for the analytic differentials.
@@ -285,13 +296,7 @@ TEST(Determinism, OneAndTwoThreadsAreBitIdentical) {
     two.threads = 2;
     RenderOutput a = renderScene(s, one);
     RenderOutput b = renderScene(s, two);
-    ASSERT_EQ(a.images.aovs.size(), b.images.aovs.size());
-    for (size_t i = 0; i < a.images.aovs.size(); ++i) {
-        const auto& pa = a.images.aovs[i].pixels;
-        const auto& pb = b.images.aovs[i].pixels;
-        ASSERT_EQ(pa.size(), pb.size());
-        EXPECT_EQ(std::memcmp(pa.data(), pb.data(), pa.size() * sizeof(float)), 0) << a.images.aovs[i].name;
-    }
+    expectSameBits(a.images, b.images);
     // A different seed changes the image (the seed is really used).
     s.render.seed = 12345;
     RenderOutput c = renderScene(s, one);
@@ -633,13 +638,7 @@ TEST(SecondaryDifferentials, SkippedOnlyForMaterialsThatReadNone) {
         m = claims.back();
     }
     RenderOutput built = renderScene(s);
-    ASSERT_EQ(skipped.images.aovs.size(), built.images.aovs.size());
-    for (size_t i = 0; i < built.images.aovs.size(); ++i) {
-        const auto& pa = skipped.images.aovs[i].pixels;
-        const auto& pb = built.images.aovs[i].pixels;
-        ASSERT_EQ(pa.size(), pb.size());
-        EXPECT_EQ(std::memcmp(pa.data(), pb.data(), pa.size() * sizeof(float)), 0) << built.images.aovs[i].name;
-    }
+    expectSameBits(skipped.images, built.images);
     int shaded = 0;
     for (const auto& c : claims) {
         shaded += c->shaded.load();
