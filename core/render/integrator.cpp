@@ -162,6 +162,9 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
     float prevHitT = 0.f;
     uint32_t prevPrim = 0;
 
+    // One closure for the whole path, cleared at each vertex: constructing it (8 lobe slots with their frames) at every
+    // vertex was a measurable part of a vertex's cost (issue 15). Its lobes live in the arena, reset with the vertex.
+    Closure closure;
     for (int depth = 0;; ++depth) {
         sampler.setDimension(firstBounceDim + uint32_t(depth) * dimsPerBounce_);
         arena.reset();
@@ -199,7 +202,7 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
             sp.hasDifferentials = sp.hasDifferentials || (sp.quad[0].valid && sp.quad[1].valid);
         }
         const Material& material = *scene_.materials[scene_.shapes[sp.shapeId].material];
-        Closure closure;
+        closure.clear();
         Color3 Le(0.f);
         // One shading pass gives the closure and the emission; the shading point stays const while it runs.
         material.shade(sp, arena, closure, material.isEmissive() ? &Le : nullptr);
