@@ -38,6 +38,6 @@ echo "== item 6: threads (anchor scene 512x512, 16 spp, min of 3)"
 echo "== summary"
 grep -h "RATIO" "$OUT/embree_limit.txt" || true
 sed -n 's/^anchor-sphere \(.*\)ours\/cycles \(.*\)$/RATIO ours\/Cycles \1= \2/p' "$OUT/cycles.txt"
-grep -h "ratio" "$OUT/graph.txt" | sed 's/^/RATIO /'
+grep -h "= ratio" "$OUT/graph.txt" | sed 's/^/RATIO /'
 grep -hE "^RATIO (projected_approx|projected/|slope|none)" "$OUT/filtered_ggx.txt" || true
 echo "outputs in $OUT"
