@@ -126,6 +126,22 @@ TEST(CoatAlbedo, TableNodesAreConvergedQuadrature) {
     EXPECT_LE(worst, 1e-3);
 }
 
+// The table computes each (μo, r) node once for all its IORs: every entry is the same bits as the one-IOR quadrature.
+TEST(CoatAlbedo, TableEntriesEqualTheOneIorQuadrature) {
+    int compared = 0;
+    for (int k : {0, 1, 7, 15})
+        for (int j : {0, 2, 9, 31})
+            for (int i : {0, 1, 12, 31}) {
+                const float r = float(j) / (coat::kRough - 1), f0 = float(k) / (coat::kF0 - 1) * coat::kMaxF0;
+                const float s = std::sqrt(std::min(f0, 0.999f)), ior = (1.f + s) / (1.f - s);
+                const float stored = coat::albedoTable()[(size_t(k) * coat::kRough + j) * coat::kMu + i];
+                const float alone = coat::albedoQuadrature(float(i) / (coat::kMu - 1), r * r, ior, coat::kQuad);
+                EXPECT_EQ(stored, alone) << "k " << k << " j " << j << " i " << i;
+                ++compared;
+            }
+    EXPECT_EQ(compared, 64);
+}
+
 // White furnace: a full coat over a white Lambertian (albedo 1) reflects all the energy: weight·E + (1 − weight·E) = 1,
 // measured by Monte Carlo over the layered closure's evalPdf for μo ∈ {0.1..1}, roughness {0.05, 0.3, 0.7}, ior {1.3,
 // 1.5, 2.0}, and half a coat.
