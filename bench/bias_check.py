@@ -4,11 +4,15 @@ rendered by a build from before an optimisation (issue 15 item 3: "the image unc
 
 The "before" binary renders the scene twice at --spp with seeds 0 and 1; the "after" binary once with seed 2. Both
 differences, after - before(0) and before(1) - before(0), are then pure noise if nothing changed but speed, so:
-  * the RMSE of after - before(0) must match the noise floor, the RMSE of before(1) - before(0);
+  * the RMSE of after - before(0) must match the noise floor, the RMSE of before(1) - before(0) (ratio < 1.2);
   * the mean of after - before(0) over the image, in units of its standard error, must be small (|z| < 4).
 A per-block z is not used: path-traced pixel noise is heavy-tailed (rare bright paths), so a block's standard error
 from its own 256 pixels is unreliable. Before that, both binaries render --same-seed-spp samples with seed 0: if
 the two images are the same bits, the change cannot have changed the expectation either (reported, not required).
+
+Everything goes through the validation toolkit (tools/specula_validation): its Renderer, `specula compare` for the
+metrics (the signed mean is mean_a - mean_b, its standard error sqrt((RMSE^2 - mean^2) / n) over the n channel values
+of the beauty layer) and OpenImageIO's pixel hash for the identity. Standard library only.
 Prints a table and, with --json, writes the numbers. Exit 0 when both statistical checks hold, 1 otherwise.
 
 Usage: bench/bias_check.py --before OLD/specula --after build/bin/specula [--scene examples/anchor-sphere.json]
@@ -18,88 +22,65 @@ import argparse
 import json
 import math
 import os
-import subprocess
 import sys
 import tempfile
 
-import numpy as np
-import OpenImageIO as oiio
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(ROOT, "tools"))
+from specula_validation import exr, metrics  # noqa: E402
+from specula_validation.render import Renderer  # noqa: E402
 
 
-def render(binary, scene, resolution, spp, seed, path):
-    cmd = [binary, "render", scene, "--resolution", resolution, "--spp", str(spp), "--seed", str(seed), "-o", path,
-           "--progress", "json"]
-    done = subprocess.run(cmd, check=True, capture_output=True, text=True)
-    seconds = None
-    for line in done.stdout.splitlines():
-        try:
-            event = json.loads(line)
-        except json.JSONDecodeError:
-            continue
-        if event.get("event") == "done":
-            seconds = event.get("seconds")
-    return seconds
-
-
-def beauty(path):
-    buf = oiio.ImageBuf(path)
-    pixels = buf.get_pixels(oiio.FLOAT)
-    return np.asarray(pixels, dtype=np.float64)[:, :, :3]
-
-
-def all_layers(path):
-    return np.asarray(oiio.ImageBuf(path).get_pixels(oiio.FLOAT))
+def difference(specula, test, ref):
+    """RMSE, signed mean and its z of test - ref over the beauty layer (every pixel and channel)."""
+    m = metrics.compare(specula, test, ref, aov="beauty", masks=("all",))
+    n = m["mask_pixels"] * m["channels"]
+    mean = m["mean_a"] - m["mean_b"]
+    se = math.sqrt(max(m["rmse"] ** 2 - mean ** 2, 0.0) / max(n - 1, 1))
+    return {"rmse": m["rmse"], "mean": mean, "z": mean / se if se > 0 else 0.0, "reference_mean": m["mean_b"]}
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--before", required=True, help="specula binary built from before the change")
     ap.add_argument("--after", required=True, help="specula binary of the change")
-    ap.add_argument("--scene", default="examples/anchor-sphere.json")
+    ap.add_argument("--scene", default=os.path.join(ROOT, "examples", "anchor-sphere.json"))
     ap.add_argument("--resolution", default="128x128")
     ap.add_argument("--spp", type=int, default=4096)
     ap.add_argument("--same-seed-spp", type=int, default=16, help="spp of the same-seed identity check (0: skip)")
-    ap.add_argument("--out", help="keep the three renders here (default: a temporary folder)")
+    ap.add_argument("--out", help="keep the renders here (default: a temporary folder)")
     ap.add_argument("--json", help="write the numbers to this file")
     args = ap.parse_args()
 
+    exr.require_oiiotool()
     out = args.out or tempfile.mkdtemp(prefix="bias_check.")
-    os.makedirs(out, exist_ok=True)
-    paths = {k: os.path.join(out, k + ".exr") for k in ("before0", "before1", "after")}
-    seconds = {
-        "before0": render(args.before, args.scene, args.resolution, args.spp, 0, paths["before0"]),
-        "before1": render(args.before, args.scene, args.resolution, args.spp, 1, paths["before1"]),
-        "after": render(args.after, args.scene, args.resolution, args.spp, 2, paths["after"]),
-    }
+    before, after = Renderer(args.before, out), Renderer(args.after, out)
+    scene = os.path.abspath(args.scene)
+
     identical = None
     if args.same_seed_spp > 0:
-        same = [os.path.join(out, k + "_seed0.exr") for k in ("before", "after")]
-        render(args.before, args.scene, args.resolution, args.same_seed_spp, 0, same[0])
-        render(args.after, args.scene, args.resolution, args.same_seed_spp, 0, same[1])
-        identical = bool(np.array_equal(all_layers(same[0]), all_layers(same[1])))
-    ref, noise, new = beauty(paths["before0"]), beauty(paths["before1"]), beauty(paths["after"])
-    floor, change = noise - ref, new - ref
+        a, _ = before.render(scene, "before_seed0", spp=args.same_seed_spp, resolution=args.resolution, seed=0)
+        b, _ = after.render(scene, "after_seed0", spp=args.same_seed_spp, resolution=args.resolution, seed=0)
+        identical = exr.pixel_hash(a) == exr.pixel_hash(b)
 
-    def stats(diff):
-        flat = diff.reshape(-1)
-        se = flat.std(ddof=1) / math.sqrt(flat.size)
-        return {"rmse": float(np.sqrt(np.mean(flat ** 2))), "mean": float(flat.mean()),
-                "z": float(flat.mean() / se) if se > 0 else 0.0}
+    ref, t_before = before.render(scene, "before0", spp=args.spp, resolution=args.resolution, seed=0)
+    noise, _ = before.render(scene, "before1", spp=args.spp, resolution=args.resolution, seed=1)
+    new, t_after = after.render(scene, "after", spp=args.spp, resolution=args.resolution, seed=2)
+    floor, change = difference(args.after, noise, ref), difference(args.after, new, ref)
 
-    result = {"scene": args.scene, "resolution": args.resolution, "spp": args.spp, "seconds": seconds,
-              "reference_mean": float(ref.mean()), "same_seed_spp": args.same_seed_spp,
-              "same_seed_identical": identical, "noise_floor": stats(floor), "change": stats(change)}
-    result["rmse_ratio"] = result["change"]["rmse"] / max(result["noise_floor"]["rmse"], 1e-30)
-    ok = abs(result["change"]["z"]) < 4 and result["rmse_ratio"] < 1.2
+    result = {"scene": args.scene, "resolution": args.resolution, "spp": args.spp,
+              "seconds": {"before": t_before, "after": t_after}, "reference_mean": floor["reference_mean"],
+              "same_seed_spp": args.same_seed_spp, "same_seed_identical": identical, "noise_floor": floor,
+              "change": change, "rmse_ratio": change["rmse"] / max(floor["rmse"], 1e-30)}
+    ok = abs(change["z"]) < 4 and result["rmse_ratio"] < 1.2
     result["unbiased"] = ok
 
     print(f"{args.scene}, {args.resolution}, {args.spp} spp; reference mean {result['reference_mean']:.6f}")
     print(f"{'difference':<28}{'RMSE':>12}{'mean':>14}{'z (image)':>11}")
-    for name, key in (("before seed 1 - seed 0", "noise_floor"), ("after - before seed 0", "change")):
-        s = result[key]
+    for name, s in (("before seed 1 - seed 0", floor), ("after - before seed 0", change)):
         print(f"{name:<28}{s['rmse']:>12.3e}{s['mean']:>14.3e}{s['z']:>11.2f}")
-    print(f"RMSE ratio (change / noise floor): {result['rmse_ratio']:.3f}; render seconds before {seconds['before0']}, "
-          f"after {seconds['after']}; {'no bias beyond noise' if ok else 'BIASED'}")
+    print(f"RMSE ratio (change / noise floor): {result['rmse_ratio']:.3f}; render seconds before {t_before}, "
+          f"after {t_after}; {'no bias beyond noise' if ok else 'BIASED'}")
     if identical is not None:
         print(f"seed 0 at {args.same_seed_spp} spp, every layer: {'the same bits' if identical else 'different bits'}")
     if args.json:
