@@ -6,10 +6,12 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <csignal>
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <sys/wait.h>
 #include <thread>
 #include <unistd.h>
@@ -20,10 +22,24 @@ namespace test = specula::test;
 
 namespace {
 
+// The main file (its "small" base scene and the cases of issue 16) and one file per surface hardened later
+// (hostile_catalogue_<surface>.json, issue 35), whose cases are appended in file-name order; names must be unique.
 const json& catalogue() {
     static const json doc = [] {
-        std::ifstream in(std::string(SPECULA_SOURCE_DIR) + "/tests/unit/data/hostile_catalogue.json");
-        return json::parse(in);
+        const fs::path data = fs::path(SPECULA_SOURCE_DIR) / "tests/unit/data";
+        std::ifstream in(data / "hostile_catalogue.json");
+        json main = json::parse(in);
+        std::vector<fs::path> extra;
+        for (const auto& e : fs::directory_iterator(data))
+            if (e.path().filename().string().rfind("hostile_catalogue_", 0) == 0 && e.path().extension() == ".json")
+                extra.push_back(e.path());
+        std::sort(extra.begin(), extra.end());
+        for (const fs::path& p : extra) {
+            std::ifstream f(p);
+            const json more = json::parse(f);
+            for (const json& c : more.at("cases")) main["cases"].push_back(c);
+        }
+        return main;
     }();
     return doc;
 }
@@ -123,5 +139,12 @@ INSTANTIATE_TEST_SUITE_P(Catalogue, HostileInput, ::testing::Range<size_t>(0, ca
                          });
 
 TEST(HostileCatalogue, HoldsAtLeastEightyCases) { EXPECT_GE(catalogue()["cases"].size(), 80u); }
+
+// Issue 35: at least 50 cases beyond the 132 of issue 16, and no two cases of one name (gtest would merge them).
+TEST(HostileCatalogue, HoldsTheCasesOfIssue35WithUniqueNames) {
+    EXPECT_GE(catalogue()["cases"].size(), 182u);
+    std::set<std::string> names;
+    for (const json& c : catalogue()["cases"]) EXPECT_TRUE(names.insert(c["name"].get<std::string>()).second) << c["name"];
+}
 
 }  // namespace
