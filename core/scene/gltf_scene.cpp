@@ -43,7 +43,13 @@ std::string saveImage(const std::vector<unsigned char>& bytes, const std::string
     std::snprintf(name, sizeof name, "%016llx", (unsigned long long)h);
     const fs::path dir = cacheFolder("gltf-images"), file = dir / (std::string(name) + ext);
     std::error_code ec;
-    if (fs::exists(file, ec) && fs::file_size(file, ec) == bytes.size()) return file.string();
+    // Reused only when every byte agrees: a corrupted file of the right size was used before (issue 35).
+    if (fs::exists(file, ec) && fs::file_size(file, ec) == bytes.size()) {
+        std::ifstream in(file, std::ios::binary);
+        std::vector<unsigned char> held(bytes.size());
+        if (in.read(reinterpret_cast<char*>(held.data()), std::streamsize(held.size())) && held == bytes)
+            return file.string();
+    }
     static std::atomic<unsigned> serial{0};
     const fs::path tmp = dir / (std::string(name) + ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(serial++) + ext);
     {

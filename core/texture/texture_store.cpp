@@ -1,5 +1,6 @@
 // TextureStore: reads images with OpenImageIO, converts them once to the linear working space, caches a
-// MIP-mapped float .tx per (content, colorspace) and samples it through a shared OIIO TextureSystem.
+// MIP-mapped float .tx per (content, colorspace), checksummed by a sidecar (core/util/cache_dir.h), and samples it
+// through a shared OIIO TextureSystem.
 #include "core/texture/texture_store.h"
 #include "core/util/cache_dir.h"
 #include "core/util/error.h"
@@ -330,6 +331,10 @@ TextureHandle TextureStore::load(const std::string& path, const std::string& col
         } catch (const ImageIoError& err) {
             throw TextureError("texture '" + path + "': " + err.what());
         }
+        // Best effort: without a sidecar the file is rebuilt next time rather than trusted.
+        (void)writeCacheChecksum(e->cachePath);
+        // OIIO may hold tiles or an open handle of an earlier file under this name (a corrupt one being replaced).
+        I.ts->invalidate(OIIO::ustring(e->cachePath), true);
     };
 
     auto openHandle = [&]() -> bool {
@@ -346,11 +351,14 @@ TextureHandle TextureStore::load(const std::string& path, const std::string& col
         return ok;
     };
 
-    if (!fs::is_regular_file(e->cachePath, ec)) makeTx();
+    // A cache file is used only when its checksum sidecar agrees with every byte of it (core/util/cache_dir.h):
+    // OpenImageIO reads a corrupted or truncated .tx, or a valid one of other content, without complaint and
+    // samples wrong texels (issue 35). Anything else is rebuilt from the pixels in memory, like the LTC and P-NDF
+    // caches refit on a bad checksum.
+    if (!fs::is_regular_file(e->cachePath, ec) || !cacheChecksumMatches(e->cachePath)) makeTx();
     if (!openHandle()) {
-        // A stale or foreign file under our name: rebuild it once and drop OIIO's view of the old one.
+        // A file replaced between the check and the open: rebuild it once more.
         makeTx();
-        I.ts->invalidate(OIIO::ustring(e->cachePath), true);
         if (!openHandle())
             throw TextureError("texture '" + path + "': cannot open the MIP cache '" + e->cachePath +
                                "': " + I.ts->geterror());

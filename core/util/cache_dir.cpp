@@ -1,10 +1,16 @@
-// The cache folders' rule (core/util/cache_dir.h).
+// The cache folders' rule and the cache files' checksum (core/util/cache_dir.h).
 #include "core/util/cache_dir.h"
 
 #include "core/util/error.h"
 
+#include <atomic>
+#include <cinttypes>
+#include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <unistd.h>
 #include <vector>
 
@@ -26,6 +32,132 @@ std::string cacheFolder(const std::string& sub) {
     }
     throw IoError("no writable cache folder for '" + sub + "' (tried $SPECULA_CACHE_DIR, $XDG_CACHE_HOME/specula, "
                   "~/.cache/specula and the temp folder)");
+}
+
+// ---- checksum ----------------------------------------------------------------------------------------------------
+
+void ContentChecksum::word(uint64_t w) {
+    // rotl is a bijection, xor with w too, and the multiplier is odd: see the header.
+    state_ = ((state_ << 23 | state_ >> 41) ^ w) * 0xff51afd7ed558ccdull;
+}
+
+void ContentChecksum::add(const void* data, size_t bytes) {
+    const unsigned char* p = static_cast<const unsigned char*>(data);
+    bytes_ += bytes;
+    while (pendingCount_ > 0 && pendingCount_ < 8 && bytes > 0) {
+        pending_[pendingCount_++] = *p++;
+        --bytes;
+    }
+    if (pendingCount_ == 8) {
+        uint64_t w;
+        std::memcpy(&w, pending_, 8);
+        word(w);
+        pendingCount_ = 0;
+    }
+    for (; bytes >= 8; p += 8, bytes -= 8) {
+        uint64_t w;
+        std::memcpy(&w, p, 8);
+        word(w);
+    }
+    for (; bytes > 0; --bytes) pending_[pendingCount_++] = *p++;
+}
+
+uint64_t ContentChecksum::value() const {
+    ContentChecksum c = *this;
+    if (c.pendingCount_ > 0) {
+        uint64_t w = 0;
+        std::memcpy(&w, c.pending_, c.pendingCount_);
+        c.word(w);
+    }
+    c.word(c.bytes_);  // the length: zero padding of the last word cannot alias a longer stream
+    uint64_t z = c.state_;
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    return z ^ (z >> 31);
+}
+
+uint64_t contentChecksum(const void* data, size_t bytes) {
+    ContentChecksum c;
+    c.add(data, bytes);
+    return c.value();
+}
+
+namespace {
+
+constexpr const char* kSidecarTag = "specula-cache-checksum 1";
+
+// Size and checksum of a file's bytes, read in 1 MiB pieces; false when it cannot be read completely.
+bool checksumFile(const std::string& file, uint64_t& size, uint64_t& sum) {
+    std::ifstream in(file, std::ios::binary);
+    if (!in) return false;
+    std::vector<char> buf(size_t(1) << 20);
+    ContentChecksum c;
+    size = 0;
+    while (in) {
+        in.read(buf.data(), std::streamsize(buf.size()));
+        const std::streamsize got = in.gcount();
+        if (got <= 0) break;
+        c.add(buf.data(), size_t(got));
+        size += uint64_t(got);
+    }
+    if (in.bad()) return false;
+    sum = c.value();
+    return true;
+}
+
+std::string sidecarLine(uint64_t size, uint64_t sum) {
+    char line[96];
+    std::snprintf(line, sizeof line, "%s %" PRIu64 " %016" PRIx64 "\n", kSidecarTag, size, sum);
+    return line;
+}
+
+}  // namespace
+
+std::string cacheChecksumPath(const std::string& file) { return file + ".sum"; }
+
+bool writeCacheChecksum(const std::string& file) {
+    uint64_t size = 0, sum = 0;
+    if (!checksumFile(file, size, sum)) return false;
+    static std::atomic<unsigned> serial{0};
+    const std::string side = cacheChecksumPath(file);
+    const std::string tmp = side + ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(serial++);
+    {
+        std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+        out << sidecarLine(size, sum);
+        out.flush();
+        if (!out) {
+            std::error_code ec;
+            fs::remove(tmp, ec);
+            return false;
+        }
+    }
+    std::error_code ec;
+    fs::rename(tmp, side, ec);
+    if (ec) {
+        fs::remove(tmp, ec);
+        return false;
+    }
+    return true;
+}
+
+bool cacheChecksumMatches(const std::string& file) {
+    // The sidecar is one short line: a longer file is not ours (and is not read whole).
+    std::error_code ec;
+    const std::string side = cacheChecksumPath(file);
+    const auto sideSize = fs::file_size(side, ec);
+    if (ec || sideSize > 128) return false;
+    std::ifstream in(side, std::ios::binary);
+    std::string recorded((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    // The size first: a truncated or padded file is refused without reading it.
+    const auto fileSize = fs::file_size(file, ec);
+    if (ec) return false;
+    const size_t tagEnd = std::strlen(kSidecarTag);
+    if (recorded.compare(0, tagEnd, kSidecarTag) != 0) return false;
+    const std::string sizeField = " " + std::to_string(uint64_t(fileSize)) + " ";
+    if (recorded.compare(tagEnd, sizeField.size(), sizeField) != 0) return false;
+    uint64_t size = 0, sum = 0;
+    if (!checksumFile(file, size, sum)) return false;
+    return recorded == sidecarLine(size, sum);
 }
 
 }  // namespace specula

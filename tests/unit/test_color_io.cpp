@@ -3,6 +3,7 @@
 #include "core/color/color_config.h"
 #include "core/io/image_io.h"
 #include "core/texture/texture_store.h"
+#include "core/util/cache_dir.h"
 #include "test_support.h"
 
 #include <OpenImageIO/imageio.h>
@@ -667,4 +668,111 @@ TEST_F(TextureFixture, ConcurrentSamplingIsConsistent) {
         });
     for (auto& th : threads) th.join();
     for (double s : sums) EXPECT_EQ(s, sums[0]);
+}
+
+// ---- cache checksums (issue 35) --------------------------------------------------------------------------------
+
+TEST(CacheChecksum, DependsOnTheBytesNotOnHowTheyArrive) {
+    std::vector<unsigned char> bytes(1000);
+    for (size_t i = 0; i < bytes.size(); ++i) bytes[i] = uint8_t(i * 7 + 3);
+    const uint64_t whole = contentChecksum(bytes.data(), bytes.size());
+    for (size_t piece : {1u, 3u, 7u, 8u, 13u, 999u}) {
+        ContentChecksum c;
+        for (size_t at = 0; at < bytes.size(); at += piece) c.add(bytes.data() + at, std::min(piece, bytes.size() - at));
+        EXPECT_EQ(c.value(), whole) << "pieces of " << piece;
+    }
+    // Every single bit flip changes it, and so do a trailing zero and a truncation.
+    for (size_t i = 0; i < bytes.size(); i += 37)
+        for (int bit = 0; bit < 8; ++bit) {
+            std::vector<unsigned char> flipped = bytes;
+            flipped[i] ^= uint8_t(1u << bit);
+            EXPECT_NE(contentChecksum(flipped.data(), flipped.size()), whole) << i << ":" << bit;
+        }
+    std::vector<unsigned char> padded = bytes;
+    padded.push_back(0);
+    EXPECT_NE(contentChecksum(padded.data(), padded.size()), whole);
+    EXPECT_NE(contentChecksum(bytes.data(), bytes.size() - 1), whole);
+}
+
+// A cached .tx that is corrupted (bytes flipped, truncated, a valid texture of other content under its name, or
+// without its checksum sidecar) is rebuilt, not sampled: every lookup equals the one through the intact cache bit for
+// bit, and the rebuilt file carries a matching checksum. Before issue 35, OIIO sampled such a file unchecked.
+TEST_F(TextureFixture, CorruptedCacheIsRebuiltNotUsed) {
+    // Lookups through the intact cache: texel centres and a few footprints (they read the coarser MIP levels too).
+    auto lookups = [](TextureStore& store, TextureHandle h) {
+        std::vector<float> v;
+        for (int y = 0; y < 8; ++y)
+            for (int x = 0; x < 8; ++x) {
+                const Vec2 uv((x + 0.5f) / 8.f, (y + 0.5f) / 8.f);
+                for (float width : {0.f, 0.3f, 1.f}) {
+                    Color3 c = store.sampleRgb(h, uv, Vec2(width, 0.f), Vec2(0.f, width));
+                    v.insert(v.end(), {c.x, c.y, c.z});
+                }
+            }
+        return v;
+    };
+    auto txFiles = [](const std::string& folder) {
+        std::vector<fs::path> tx;
+        for (auto& e : fs::recursive_directory_iterator(folder))
+            if (e.path().extension() == ".tx") tx.push_back(e.path());
+        return tx;
+    };
+    std::vector<float> reference;
+    {
+        TextureStore store(config());
+        reference = lookups(store, store.load(png, "sRGB"));
+    }
+    const std::vector<fs::path> intact = txFiles(dir + "/cache");
+    ASSERT_EQ(intact.size(), 1u);
+    ASSERT_TRUE(cacheChecksumMatches(intact[0].string()));
+    const std::string intactBytes = test::readFile(intact[0].string());
+
+    // A valid texture of other content and the same size: the inverted checker, cached in a folder of its own.
+    const std::string otherPng = dir + "/inverted.png";
+    {
+        std::vector<uint8_t> rgb;
+        for (int y = 0; y < 8; ++y)
+            for (int x = 0; x < 8; ++x) {
+                const uint8_t v = ((x + y) % 2) ? kA : kB;
+                rgb.insert(rgb.end(), {v, v, v});
+            }
+        writePng8(otherPng, 8, 8, rgb);
+        setenv("SPECULA_CACHE_DIR", (dir + "/cache-other").c_str(), 1);
+        TextureStore store(config());
+        store.load(otherPng, "sRGB");
+    }
+    const std::vector<fs::path> others = txFiles(dir + "/cache-other");
+    ASSERT_EQ(others.size(), 1u);
+    const std::string foreignBytes = test::readFile(others[0].string());
+
+    std::string flipped = intactBytes;
+    for (size_t i = flipped.size() / 3; i < flipped.size(); i += 61) flipped[i] = char(flipped[i] ^ 0x5a);
+    const struct {
+        const char* name;
+        std::string bytes;
+        bool keepSidecar;
+    } corruptions[] = {
+        {"flipped", flipped, true},
+        {"truncated", intactBytes.substr(0, intactBytes.size() / 2), true},
+        {"foreign", foreignBytes, true},
+        {"no-sidecar", intactBytes, false},
+    };
+    for (const auto& c : corruptions) {
+        SCOPED_TRACE(c.name);
+        const std::string base = dir + "/cache-" + c.name;
+        const fs::path file = fs::path(base) / intact[0].parent_path().filename() / intact[0].filename();
+        fs::create_directories(file.parent_path());
+        test::writeFile(file.string(), c.bytes);
+        if (c.keepSidecar) fs::copy_file(cacheChecksumPath(intact[0].string()), cacheChecksumPath(file.string()));
+        setenv("SPECULA_CACHE_DIR", base.c_str(), 1);
+        TextureStore store(config());
+        const std::vector<float> got = lookups(store, store.load(png, "sRGB"));
+        ASSERT_EQ(got.size(), reference.size());
+        EXPECT_EQ(std::memcmp(got.data(), reference.data(), got.size() * sizeof(float)), 0);
+        EXPECT_TRUE(cacheChecksumMatches(file.string()));
+        if (c.keepSidecar) {  // replaced by a rebuild (compared by checksum: a failure should not print the file)
+            const std::string now = test::readFile(file.string());
+            EXPECT_NE(contentChecksum(now.data(), now.size()), contentChecksum(c.bytes.data(), c.bytes.size()));
+        }
+    }
 }
