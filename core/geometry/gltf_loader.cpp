@@ -13,14 +13,28 @@
 #define TINYGLTF_NO_EXTERNAL_IMAGE
 #include <tiny_gltf.h>
 
+#include "core/util/error.h"
+
 #include <glm/gtc/quaternion.hpp>
 
 #include <algorithm>
+#include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <optional>
+#include <set>
 #include <sstream>
+
+namespace specula {
+
+GltfValueError::GltfValueError(const std::string& file_, const std::string& pointer_, const std::string& reason_)
+    : MeshLoadError("cannot load mesh '" + file_ + "': " + pointer_ + ": " + reason_), file(file_), pointer(pointer_),
+      reason(reason_) {}
+
+}  // namespace specula
 
 namespace specula::detail {
 
@@ -52,6 +66,7 @@ struct BufferAccess {
     std::vector<std::filesystem::path> roots;
     std::string baseDir;  // the glTF's folder as tinygltf spells it (the prefix of the URI's candidate path)
     std::string refused;  // the first URI refused, for the error message
+    uintmax_t bytesRead = 0;  // all external buffers together are bounded by kMaxBufferBytes too (issue 35)
     bool inside(const std::string& file) const {
         std::error_code ec;
         std::filesystem::path p = std::filesystem::weakly_canonical(file, ec);
@@ -84,10 +99,11 @@ bool readBuffer(std::vector<unsigned char>* out, std::string* err, const std::st
         return false;
     }
     uintmax_t size = std::filesystem::file_size(file, ec);
-    if (ec || size > kMaxBufferBytes) {
-        if (err) *err = "larger than 4 GiB";
+    if (ec || size > kMaxBufferBytes - std::min(access->bytesRead, kMaxBufferBytes)) {
+        if (err) *err = "larger than 4 GiB (with the buffers read before it)";
         return false;
     }
+    access->bytesRead += size;
     std::ifstream in(file, std::ios::binary);
     out->resize(size_t(size));
     if (size > 0 && !in.read(reinterpret_cast<char*>(out->data()), std::streamsize(size))) {
@@ -98,6 +114,500 @@ bool readBuffer(std::vector<unsigned char>* out, std::string* err, const std::st
 }
 
 std::string expandNothing(const std::string& path, void*) { return path; }  // no ~ or $VAR expansion in URIs
+
+// ---- The glTF JSON checked before tinygltf reads it (issue 35) -------------------------------------------------------
+// tinygltf reads what it understands and silently defaults the rest: a negative byteOffset becomes 0, an index past
+// the end is kept and skipped later, yfov 0 or a scale of 1e30 pass through. So the JSON itself is checked first, with
+// a JSON pointer and the valid range in every error (glTF 2.0 specification §5 and the schemas of
+// KHR_lights_punctual, KHR_materials_ior, _transmission and _emissive_strength). It also keeps tinygltf from reading an
+// image's bufferView past its buffer (tinygltf passes &buffer.data[byteOffset] with byteLength unchecked).
+
+using Json = nlohmann::json;
+
+constexpr double kPi = 3.14159265358979323846;
+// A .gltf is JSON text: beyond this it is a wrong file, as a JSON scene is (scene_loader.cpp kMaxSceneBytes).
+constexpr uintmax_t kMaxGltfJsonBytes = uintmax_t(256) << 20;
+// tinygltf takes a GLB's length as an unsigned int.
+constexpr uintmax_t kMaxGlbBytes = (uintmax_t(1) << 32) - 1;
+// tinygltf copies "extras" and "extensions" by recursion (ParseJsonAsValue): deeper text would overflow the stack.
+// glTF's own structure is at most 7 levels deep; 64 is the scene loader's bound (scene_loader.cpp kMaxJsonDepth).
+constexpr int kMaxGltfJsonDepth = 64;
+// Node hierarchy depth (the importers walk it with an explicit stack; this bounds the composed transform's error too).
+constexpr size_t kMaxNodeDepth = 1024;
+// A node's transform, alone and composed with its ancestors', scales by at most 1e6 and translates by at most 1e9 (in
+// metres: a float position keeps millimetres there): beyond, triangles collapse or overflow float.
+constexpr double kMaxNodeScale = 1e6, kMaxNodeTranslation = 1e9;
+constexpr double kMaxLightIntensity = 1e12;  // the scene loader's bound on intensity and power (scene_loader.cpp)
+constexpr double kMaxDistance = 1e12;         // znear, zfar, light range, orthographic magnification
+constexpr double kMaxIor = 10.0;              // bsdf.dielectric's hard ior range is [1.0001, 10]
+constexpr uint64_t kMaxByteSize = uint64_t(1) << 53;  // byte offsets and lengths: exact as JSON numbers
+// Vertices (and indices) of all node instances together: 2^26 vertices with normals, uvs and tangents are 3 GiB.
+constexpr size_t kMaxInstancedElements = size_t(1) << 26;
+
+std::string showNumber(double v) {
+    char b[32];
+    std::snprintf(b, sizeof b, "%.6g", v);
+    return b;
+}
+
+std::string showJson(const Json& j) {
+    std::string s = j.dump();
+    return s.size() > 40 ? s.substr(0, 37) + "..." : s;
+}
+
+struct Range {
+    double lo, hi;
+    bool loOpen = false, hiOpen = false;
+    bool contains(double v) const {
+        return std::isfinite(v) && (loOpen ? v > lo : v >= lo) && (hiOpen ? v < hi : v <= hi);
+    }
+    std::string text() const {
+        return std::string(loOpen ? "(" : "[") + showNumber(lo) + ", " + showNumber(hi) + (hiOpen ? ")" : "]");
+    }
+};
+
+// The first byte at which brackets outside strings nest deeper than 'limit', or npos.
+size_t tooDeepAt(const char* text, size_t size, int limit) {
+    int depth = 0;
+    bool inString = false;
+    for (size_t i = 0; i < size; ++i) {
+        const char c = text[i];
+        if (inString) {
+            if (c == '\\') ++i;
+            else if (c == '"') inString = false;
+        } else if (c == '"') {
+            inString = true;
+        } else if (c == '[' || c == '{') {
+            if (++depth > limit) return i;
+        } else if (c == ']' || c == '}') {
+            --depth;
+        }
+    }
+    return std::string::npos;
+}
+
+class GltfChecker {
+public:
+    GltfChecker(const std::string& path, const Json& doc) : path_(path), doc_(doc) {}
+
+    void run() {
+        if (!doc_.is_object()) fail("", "expected a JSON object, got " + showJson(doc_));
+        for (const char* name : {"scenes", "nodes", "meshes", "accessors", "bufferViews", "buffers", "cameras", "materials",
+                                 "textures", "images", "samplers", "skins", "animations"}) {
+            const Json& a = array(doc_, "", name);
+            for (size_t i = 0; i < a.size(); ++i)
+                if (!a[i].is_object()) fail(at("/" + std::string(name), i), "expected an object, got " + showJson(a[i]));
+        }
+        checkBuffers();
+        checkImagesAndTextures();
+        checkAccessors();
+        checkMeshes();
+        checkMaterials();
+        checkCameras();
+        checkLights();
+        checkNodes();
+        checkScenes();
+        checkHierarchy();
+    }
+
+private:
+    const std::string& path_;
+    const Json& doc_;
+    std::vector<int64_t> parent_;  // of each node (-1: none), after checkNodes
+
+    [[noreturn]] void fail(const std::string& pointer, const std::string& reason) const {
+        throw GltfValueError(path_, pointer.empty() ? "/" : pointer, reason);
+    }
+    static std::string key(const std::string& ptr, const std::string& k) { return ptr + "/" + pointerEscape(k); }
+    static std::string at(const std::string& ptr, size_t i) { return ptr + "/" + std::to_string(i); }
+
+    const Json& array(const Json& obj, const std::string& ptr, const char* name) const {
+        static const Json empty = Json::array();
+        auto it = obj.find(name);
+        if (it == obj.end()) return empty;
+        if (!it->is_array()) fail(key(ptr, name), "expected an array, got " + showJson(*it));
+        return *it;
+    }
+    const Json* object(const Json& obj, const std::string& ptr, const char* name) const {
+        auto it = obj.find(name);
+        if (it == obj.end()) return nullptr;
+        if (!it->is_object()) fail(key(ptr, name), "expected an object, got " + showJson(*it));
+        return &*it;
+    }
+    size_t count(const char* name) const { return array(doc_, "", name).size(); }
+    const Json& element(const char* name, size_t i) const { return doc_.at(name).at(i); }
+
+    std::optional<double> number(const Json& obj, const std::string& ptr, const char* name, Range r, const std::string& meaning,
+                                 bool required = false) const {
+        auto it = obj.find(name);
+        const std::string p = key(ptr, name);
+        if (it == obj.end()) {
+            if (required) fail(p, "missing: " + meaning + " in " + r.text() + " is required");
+            return std::nullopt;
+        }
+        return numberValue(*it, p, r, meaning);
+    }
+    double numberValue(const Json& v, const std::string& p, Range r, const std::string& meaning) const {
+        if (!v.is_number()) fail(p, "expected a number in " + r.text() + " (" + meaning + "), got " + showJson(v));
+        const double x = v.get<double>();
+        if (!r.contains(x)) fail(p, showNumber(x) + " is outside " + r.text() + " (" + meaning + ")");
+        return x;
+    }
+    std::vector<double> numbers(const Json& obj, const std::string& ptr, const char* name, size_t n, Range r,
+                                const std::string& meaning) const {
+        auto it = obj.find(name);
+        if (it == obj.end()) return {};
+        const std::string p = key(ptr, name);
+        if (!it->is_array() || it->size() != n)
+            fail(p, "expected an array of " + std::to_string(n) + " numbers in " + r.text() + " (" + meaning + "), got " + showJson(*it));
+        std::vector<double> out;
+        for (size_t i = 0; i < n; ++i) out.push_back(numberValue((*it)[i], at(p, i), r, meaning));
+        return out;
+    }
+    // A non-negative integer in [lo, hi]; the caller checks sums and products with overflow checks.
+    std::optional<uint64_t> integer(const Json& obj, const std::string& ptr, const char* name, uint64_t lo, uint64_t hi,
+                                    const std::string& meaning, bool required = false) const {
+        auto it = obj.find(name);
+        const std::string p = key(ptr, name);
+        const std::string range = "[" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
+        if (it == obj.end()) {
+            if (required) fail(p, "missing: " + meaning + ", an integer in " + range + ", is required");
+            return std::nullopt;
+        }
+        if (!it->is_number_integer()) fail(p, "expected an integer in " + range + " (" + meaning + "), got " + showJson(*it));
+        if (!it->is_number_unsigned() && it->get<int64_t>() < 0)
+            fail(p, std::to_string(it->get<int64_t>()) + " is outside " + range + " (" + meaning + ")");
+        const uint64_t v = it->get<uint64_t>();
+        if (v < lo || v > hi) fail(p, std::to_string(v) + " is outside " + range + " (" + meaning + ")");
+        return v;
+    }
+    // An index into the top-level array 'of' (the value v at pointer p).
+    size_t indexValue(const Json& v, const std::string& p, const char* of) const {
+        const size_t n = count(of);
+        const std::string range = n ? "[0, " + std::to_string(n - 1) + "]" : "none: the file has no " + std::string(of);
+        if (!v.is_number_integer()) fail(p, "expected an index into " + std::string(of) + " (" + range + "), got " + showJson(v));
+        const bool negative = !v.is_number_unsigned() && v.get<int64_t>() < 0;
+        if (negative || v.get<uint64_t>() >= n)
+            fail(p, (negative ? std::to_string(v.get<int64_t>()) : std::to_string(v.get<uint64_t>())) + " is not an index into " +
+                        of + " (" + (n ? "valid: " + range + ", the file has " + std::to_string(n) : range) + ")");
+        return size_t(v.get<uint64_t>());
+    }
+    std::optional<size_t> index(const Json& obj, const std::string& ptr, const char* name, const char* of, bool required = false) const {
+        auto it = obj.find(name);
+        if (it == obj.end()) {
+            if (required) fail(key(ptr, name), std::string("missing: an index into ") + of + " is required");
+            return std::nullopt;
+        }
+        return indexValue(*it, key(ptr, name), of);
+    }
+    std::string string(const Json& obj, const std::string& ptr, const char* name, std::initializer_list<const char*> allowed,
+                       bool required) const {
+        auto it = obj.find(name);
+        std::string list;
+        for (const char* a : allowed) list += std::string(list.empty() ? "" : ", ") + "\"" + a + "\"";
+        if (it == obj.end()) {
+            if (required) fail(key(ptr, name), "missing: one of " + list + " is required");
+            return "";
+        }
+        if (it->is_string())
+            for (const char* a : allowed)
+                if (it->get<std::string>() == a) return a;
+        fail(key(ptr, name), showJson(*it) + " is not one of " + list);
+    }
+
+    void checkBuffers() {
+        const Json& buffers = array(doc_, "", "buffers");
+        for (size_t i = 0; i < buffers.size(); ++i)
+            integer(buffers[i], at("/buffers", i), "byteLength", 1, kMaxByteSize, "the buffer's size in bytes", true);
+        const Json& views = array(doc_, "", "bufferViews");
+        for (size_t i = 0; i < views.size(); ++i) {
+            const std::string p = at("/bufferViews", i);
+            const size_t buffer = *index(views[i], p, "buffer", "buffers", true);
+            const uint64_t offset = integer(views[i], p, "byteOffset", 0, kMaxByteSize, "a byte offset into the buffer").value_or(0);
+            const uint64_t length = *integer(views[i], p, "byteLength", 1, kMaxByteSize, "the view's size in bytes", true);
+            if (auto stride = integer(views[i], p, "byteStride", 4, 252, "the distance between elements in bytes"); stride && *stride % 4)
+                fail(key(p, "byteStride"), std::to_string(*stride) + " is not a multiple of 4 in [4, 252]");
+            const uint64_t bufferLength = element("buffers", buffer).at("byteLength").get<uint64_t>();
+            if (offset + length > bufferLength)
+                fail(key(p, "byteLength"), "byteOffset " + std::to_string(offset) + " + byteLength " + std::to_string(length) +
+                                               " = " + std::to_string(offset + length) + " is beyond buffer " +
+                                               std::to_string(buffer) + "'s byteLength " + std::to_string(bufferLength));
+        }
+    }
+
+    void checkImagesAndTextures() {
+        const Json& images = array(doc_, "", "images");
+        for (size_t i = 0; i < images.size(); ++i) index(images[i], at("/images", i), "bufferView", "bufferViews");
+        const Json& textures = array(doc_, "", "textures");
+        for (size_t i = 0; i < textures.size(); ++i) {
+            index(textures[i], at("/textures", i), "source", "images");
+            index(textures[i], at("/textures", i), "sampler", "samplers");
+        }
+    }
+
+    static int componentBytes(uint64_t type) {
+        switch (type) {
+        case 5120: case 5121: return 1;
+        case 5122: case 5123: return 2;
+        case 5125: case 5126: return 4;
+        default: return 0;
+        }
+    }
+
+    void checkAccessors() {
+        const Json& accessors = array(doc_, "", "accessors");
+        for (size_t i = 0; i < accessors.size(); ++i) {
+            const Json& a = accessors[i];
+            const std::string p = at("/accessors", i);
+            const auto view = index(a, p, "bufferView", "bufferViews");
+            const uint64_t offset = integer(a, p, "byteOffset", 0, kMaxByteSize, "a byte offset into the bufferView").value_or(0);
+            const uint64_t componentType = *integer(a, p, "componentType", 0, kMaxByteSize, "the component type", true);
+            const int size = componentBytes(componentType);
+            if (!size)
+                fail(key(p, "componentType"), std::to_string(componentType) +
+                                                  " is not a glTF component type (5120, 5121, 5122, 5123, 5125 or 5126)");
+            // No upper bound of its own: count is bounded by its bufferView below (overflow included).
+            const uint64_t elements = *integer(a, p, "count", 1, UINT64_MAX, "the number of elements", true);
+            const std::string type = string(a, p, "type", {"SCALAR", "VEC2", "VEC3", "VEC4", "MAT2", "MAT3", "MAT4"}, true);
+            const int components = type == "SCALAR" ? 1 : type == "VEC2" ? 2 : type == "VEC3" ? 3 : type == "VEC4" ? 4
+                                   : type == "MAT2" ? 4 : type == "MAT3" ? 9 : 16;
+            if (!view) continue;  // all zeros (or sparse): nothing is read
+            const Json& v = element("bufferViews", *view);
+            const uint64_t viewLength = v.at("byteLength").get<uint64_t>(), elementBytes = uint64_t(size) * uint64_t(components);
+            const uint64_t stride = v.contains("byteStride") ? v.at("byteStride").get<uint64_t>() : elementBytes;
+            uint64_t span = 0, end = 0;
+            const bool fits = !__builtin_mul_overflow(elements - 1, stride, &span) && !__builtin_add_overflow(span, elementBytes, &end) &&
+                              !__builtin_add_overflow(end, offset, &end) && end <= viewLength;
+            if (!fits)
+                fail(p, "accessor exceeds its bufferView " + std::to_string(*view) + ": byteOffset " + std::to_string(offset) +
+                            " + (count " + std::to_string(elements) + " - 1) x stride " + std::to_string(stride) + " + " +
+                            std::to_string(elementBytes) + " bytes must be at most its byteLength " + std::to_string(viewLength));
+        }
+    }
+
+    void checkMeshes() {
+        const Json& meshes = array(doc_, "", "meshes");
+        for (size_t i = 0; i < meshes.size(); ++i) {
+            const std::string mp = key(at("/meshes", i), "primitives");
+            const Json& prims = array(meshes[i], at("/meshes", i), "primitives");
+            for (size_t k = 0; k < prims.size(); ++k) {
+                const std::string p = at(mp, k);
+                if (!prims[k].is_object()) fail(p, "expected an object, got " + showJson(prims[k]));
+                if (const Json* attributes = object(prims[k], p, "attributes"))
+                    for (auto it = attributes->begin(); it != attributes->end(); ++it)
+                        indexValue(it.value(), key(key(p, "attributes"), it.key()), "accessors");
+                index(prims[k], p, "indices", "accessors");
+                index(prims[k], p, "material", "materials");
+                integer(prims[k], p, "mode", 0, 6, "the topology: 0 points ... 4 triangles ... 6 triangle fan");
+            }
+        }
+    }
+
+    void textureInfo(const Json& obj, const std::string& ptr, const char* name) const {
+        const Json* t = object(obj, ptr, name);
+        if (!t) return;
+        const std::string p = key(ptr, name);
+        index(*t, p, "index", "textures", true);
+        integer(*t, p, "texCoord", 0, 255, "the TEXCOORD_n set");
+    }
+
+    void checkMaterials() {
+        const Json& materials = array(doc_, "", "materials");
+        const Range unit{0, 1};
+        for (size_t i = 0; i < materials.size(); ++i) {
+            const Json& m = materials[i];
+            const std::string p = at("/materials", i);
+            if (const Json* pbr = object(m, p, "pbrMetallicRoughness")) {
+                const std::string pp = key(p, "pbrMetallicRoughness");
+                numbers(*pbr, pp, "baseColorFactor", 4, unit, "linear RGBA");
+                number(*pbr, pp, "metallicFactor", unit, "metalness");
+                number(*pbr, pp, "roughnessFactor", unit, "perceptual roughness");
+                textureInfo(*pbr, pp, "baseColorTexture");
+                textureInfo(*pbr, pp, "metallicRoughnessTexture");
+            }
+            textureInfo(m, p, "normalTexture");
+            if (const Json* n = object(m, p, "normalTexture"))
+                number(*n, key(p, "normalTexture"), "scale", Range{-1e3, 1e3}, "the normal map's strength");
+            textureInfo(m, p, "occlusionTexture");
+            if (const Json* o = object(m, p, "occlusionTexture")) number(*o, key(p, "occlusionTexture"), "strength", unit, "occlusion strength");
+            textureInfo(m, p, "emissiveTexture");
+            numbers(m, p, "emissiveFactor", 3, unit, "linear RGB");
+            number(m, p, "alphaCutoff", Range{0, 1}, "alpha threshold");
+            const Json* ext = object(m, p, "extensions");
+            if (!ext) continue;
+            const std::string ep = key(p, "extensions");
+            if (const Json* e = object(*ext, ep, "KHR_materials_emissive_strength"))
+                number(*e, key(ep, "KHR_materials_emissive_strength"), "emissiveStrength", Range{0, 1e9}, "a multiplier of emissiveFactor");
+            if (const Json* e = object(*ext, ep, "KHR_materials_transmission")) {
+                number(*e, key(ep, "KHR_materials_transmission"), "transmissionFactor", unit, "the transmitted fraction");
+                textureInfo(*e, key(ep, "KHR_materials_transmission"), "transmissionTexture");
+            }
+            if (const Json* e = object(*ext, ep, "KHR_materials_ior"); e && e->contains("ior")) {
+                // The extension allows ior >= 1, and 0 (no refraction); bsdf.dielectric takes at most 10.
+                const std::string ip = key(key(ep, "KHR_materials_ior"), "ior");
+                const Json& v = e->at("ior");
+                if (!(v.is_number() && v.get<double>() == 0.0)) numberValue(v, ip, Range{1, kMaxIor}, "index of refraction: 0 or [1, 10]");
+            }
+        }
+    }
+
+    void checkCameras() {
+        const Json& cameras = array(doc_, "", "cameras");
+        for (size_t i = 0; i < cameras.size(); ++i) {
+            const std::string p = at("/cameras", i);
+            const std::string type = string(cameras[i], p, "type", {"perspective", "orthographic"}, true);
+            const Json* c = object(cameras[i], p, type.c_str());
+            if (!c) fail(key(p, type), "missing: the " + type + " camera's parameters are required");
+            const std::string cp = key(p, type);
+            if (type == "perspective") {
+                number(*c, cp, "yfov", Range{0, kPi, true, true}, "the vertical field of view in radians", true);
+                // The scene import renders 540 rows and round(540 x aspectRatio) columns, 16 to 8192 (gltf_scene.cpp).
+                const double h = GltfSceneInfo::kImageHeight;
+                number(*c, cp, "aspectRatio", Range{GltfSceneInfo::kMinImageWidth / h, GltfSceneInfo::kMaxImageWidth / h},
+                       "width / height; the image is 540 pixels high and 16 to 8192 wide");
+                const double znear = *number(*c, cp, "znear", Range{0, kMaxDistance, true}, "the near clipping distance", true);
+                number(*c, cp, "zfar", Range{znear, kMaxDistance, true}, "the far clipping distance, beyond znear");
+            } else {
+                for (const char* mag : {"xmag", "ymag"})
+                    if (*number(*c, cp, mag, Range{-kMaxDistance, kMaxDistance}, "the half size of the view", true) == 0.0)
+                        fail(key(cp, mag), "0 is outside [-1e+12, 1e+12] without 0 (the half size of the view)");
+                const double znear = *number(*c, cp, "znear", Range{0, kMaxDistance}, "the near clipping distance", true);
+                number(*c, cp, "zfar", Range{znear, kMaxDistance, true}, "the far clipping distance, beyond znear", true);
+            }
+        }
+    }
+
+    size_t lightCount() const {
+        const Json* ext = object(doc_, "", "extensions");
+        const Json* lp = ext ? object(*ext, "/extensions", "KHR_lights_punctual") : nullptr;
+        return lp ? array(*lp, "/extensions/KHR_lights_punctual", "lights").size() : 0;
+    }
+
+    void checkLights() {
+        const Json* ext = object(doc_, "", "extensions");
+        const Json* lp = ext ? object(*ext, "/extensions", "KHR_lights_punctual") : nullptr;
+        if (!lp) return;
+        const std::string base = "/extensions/KHR_lights_punctual/lights";
+        const Json& lights = array(*lp, "/extensions/KHR_lights_punctual", "lights");
+        for (size_t i = 0; i < lights.size(); ++i) {
+            const Json& l = lights[i];
+            const std::string p = at(base, i);
+            if (!l.is_object()) fail(p, "expected an object, got " + showJson(l));
+            const std::string type = string(l, p, "type", {"directional", "point", "spot"}, true);
+            numbers(l, p, "color", 3, Range{0, 1}, "linear RGB");
+            number(l, p, "intensity", Range{0, kMaxLightIntensity}, type == "directional" ? "illuminance in lux" : "luminous intensity in candela");
+            number(l, p, "range", Range{0, kMaxDistance, true}, "the distance where the light ends");
+            if (type != "spot") continue;
+            const Json* s = object(l, p, "spot");
+            if (!s) continue;  // the defaults: 0 and pi/4
+            const std::string sp = key(p, "spot");
+            const double inner = number(*s, sp, "innerConeAngle", Range{0, kPi / 2, false, true}, "radians from the axis").value_or(0.0);
+            const double outer = number(*s, sp, "outerConeAngle", Range{0, kPi / 2, true}, "radians from the axis").value_or(kPi / 4);
+            if (!(inner < outer))
+                fail(key(sp, "innerConeAngle"), showNumber(inner) + " is not below outerConeAngle " + showNumber(outer) +
+                                                    " (valid: [0, outerConeAngle))");
+        }
+    }
+
+    void checkNodes() {
+        const Json& nodes = array(doc_, "", "nodes");
+        const size_t lights = lightCount();
+        parent_.assign(nodes.size(), -1);
+        for (size_t i = 0; i < nodes.size(); ++i) {
+            const Json& n = nodes[i];
+            const std::string p = at("/nodes", i);
+            index(n, p, "mesh", "meshes");
+            index(n, p, "camera", "cameras");
+            index(n, p, "skin", "skins");
+            const Json& children = array(n, p, "children");
+            for (size_t k = 0; k < children.size(); ++k) {
+                const std::string cp = at(key(p, "children"), k);
+                const size_t c = indexValue(children[k], cp, "nodes");
+                if (c == i) fail(cp, "node " + std::to_string(i) + " is its own child (glTF nodes form trees)");
+                if (parent_[c] >= 0)
+                    fail(cp, "node " + std::to_string(c) + " is already a child of node " + std::to_string(parent_[c]) +
+                                 " (glTF nodes form disjoint trees: one parent at most)");
+                parent_[c] = int64_t(i);
+            }
+            if (const Json* ext = object(n, p, "extensions"))
+                if (const Json* l = object(*ext, key(p, "extensions"), "KHR_lights_punctual")) {
+                    const std::string lp = key(key(p, "extensions"), "KHR_lights_punctual");
+                    const size_t valid = lights;
+                    auto it = l->find("light");
+                    if (it == l->end()) fail(key(lp, "light"), "missing: an index into KHR_lights_punctual's lights is required");
+                    const bool ok = it->is_number_integer() && (it->is_number_unsigned() || it->get<int64_t>() >= 0) &&
+                                    it->get<uint64_t>() < valid;
+                    if (!ok)
+                        fail(key(lp, "light"), showJson(*it) + " is not an index into /extensions/KHR_lights_punctual/lights (" +
+                                                   (valid ? "valid: [0, " + std::to_string(valid - 1) + "]" : "the file has none") + ")");
+                }
+            const Range scale{-kMaxNodeScale, kMaxNodeScale}, move{-kMaxNodeTranslation, kMaxNodeTranslation};
+            if (n.contains("matrix")) {
+                const std::vector<double> m = numbers(n, p, "matrix", 16, Range{-kMaxNodeTranslation, kMaxNodeTranslation},
+                                                      "a column-major affine transform");
+                for (int c = 0; c < 3; ++c)
+                    for (int r = 0; r < 3; ++r)
+                        if (!scale.contains(m[size_t(c * 4 + r)]))
+                            fail(at(key(p, "matrix"), size_t(c * 4 + r)), showNumber(m[size_t(c * 4 + r)]) + " is outside " + scale.text() +
+                                                                             " (the linear part of the transform)");
+                for (int k : {3, 7, 11, 15})
+                    if (std::abs(m[size_t(k)] - (k == 15 ? 1.0 : 0.0)) > 1e-6)
+                        fail(at(key(p, "matrix"), size_t(k)), showNumber(m[size_t(k)]) + " must be " + (k == 15 ? "1" : "0") +
+                                                                 " (the last row of an affine transform is 0, 0, 0, 1)");
+            }
+            numbers(n, p, "translation", 3, move, "a translation in metres");
+            numbers(n, p, "scale", 3, scale, "a scale factor");
+            const std::vector<double> q = numbers(n, p, "rotation", 4, Range{-1.01, 1.01}, "a unit quaternion x, y, z, w");
+            if (!q.empty()) {
+                const double length = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+                if (!(std::abs(length - 1.0) <= 0.01))
+                    fail(key(p, "rotation"), "a quaternion of length " + showNumber(length) + " is not a rotation (valid: length 1 +- 0.01)");
+            }
+        }
+    }
+
+    void checkScenes() {
+        index(doc_, "", "scene", "scenes");
+        const Json& scenes = array(doc_, "", "scenes");
+        for (size_t s = 0; s < scenes.size(); ++s) {
+            const std::string p = key(at("/scenes", s), "nodes");
+            const Json& roots = array(scenes[s], at("/scenes", s), "nodes");
+            std::set<size_t> seen;
+            for (size_t k = 0; k < roots.size(); ++k) {
+                const size_t r = indexValue(roots[k], at(p, k), "nodes");
+                if (parent_[r] >= 0)
+                    fail(at(p, k), "node " + std::to_string(r) + " is a child of node " + std::to_string(parent_[r]) +
+                                       " (a scene lists root nodes only)");
+                if (!seen.insert(r).second) fail(at(p, k), "node " + std::to_string(r) + " is listed twice");
+            }
+        }
+    }
+
+    // With one parent at most per node, a node that no root reaches lies on (or below) a cycle.
+    void checkHierarchy() const {
+        const Json& nodes = array(doc_, "", "nodes");
+        std::vector<size_t> depth(nodes.size(), 0), stack;
+        std::vector<char> reached(nodes.size(), 0);
+        for (size_t i = 0; i < nodes.size(); ++i)
+            if (parent_[i] < 0) stack.push_back(i), reached[i] = 1, depth[i] = 1;
+        while (!stack.empty()) {
+            const size_t i = stack.back();
+            stack.pop_back();
+            if (depth[i] > kMaxNodeDepth)
+                fail(at("/nodes", i), "node " + std::to_string(i) + " is " + std::to_string(depth[i]) +
+                                          " levels deep; the node hierarchy may be at most " + std::to_string(kMaxNodeDepth) + " deep");
+            for (const Json& c : array(nodes[i], at("/nodes", i), "children")) {
+                const size_t k = c.get<size_t>();
+                reached[k] = 1, depth[k] = depth[i] + 1;
+                stack.push_back(k);
+            }
+        }
+        for (size_t i = 0; i < nodes.size(); ++i)
+            if (!reached[i])
+                fail(at("/nodes", i), "node " + std::to_string(i) + " is in a cycle of children (glTF nodes form trees; " +
+                                          "its parent is node " + std::to_string(parent_[i]) + ")");
+    }
+};
 
 // a + b and a * b, or false on overflow (accessor bounds come from the file: 2^57 + 1 elements wrapped the product).
 bool addSize(size_t a, size_t b, size_t& r) { return !__builtin_add_overflow(a, b, &r); }
@@ -146,7 +656,10 @@ std::vector<int> rootNodes(const tinygltf::Model& m) {
     std::vector<int> roots;
     if (!m.scenes.empty()) {
         if (m.defaultScene >= 0 && size_t(m.defaultScene) < m.scenes.size()) return m.scenes[size_t(m.defaultScene)].nodes;
-        for (const auto& scene : m.scenes) roots.insert(roots.end(), scene.nodes.begin(), scene.nodes.end());
+        std::set<int> seen;  // scenes may share root nodes: each is instanced once
+        for (const auto& scene : m.scenes)
+            for (int n : scene.nodes)
+                if (seen.insert(n).second) roots.push_back(n);
         return roots;
     }
     std::vector<bool> isChild(m.nodes.size(), false);
@@ -158,6 +671,65 @@ std::vector<int> rootNodes(const tinygltf::Model& m) {
     return roots;
 }
 
+glm::dmat4 localTransform(const tinygltf::Node& node) {
+    if (node.matrix.size() == 16) {
+        glm::dmat4 M;
+        for (int c = 0; c < 4; ++c)
+            for (int r = 0; r < 4; ++r) M[c][r] = node.matrix[size_t(c * 4 + r)];  // column-major
+        return M;
+    }
+    glm::dmat4 T(1.0), R(1.0), S(1.0);
+    if (node.translation.size() == 3)
+        T[3] = glm::dvec4(node.translation[0], node.translation[1], node.translation[2], 1.0);
+    if (node.rotation.size() == 4) {  // glTF stores (x, y, z, w)
+        glm::dquat q(node.rotation[3], node.rotation[0], node.rotation[1], node.rotation[2]);
+        R = glm::mat4_cast(glm::normalize(q));
+    }
+    if (node.scale.size() == 3) {
+        S[0][0] = node.scale[0];
+        S[1][1] = node.scale[1];
+        S[2][2] = node.scale[2];
+    }
+    return T * R * S;  // glTF: M = T * R * S
+}
+
+
+// The transform of a node composed with its ancestors' is bounded as a node's own is (GltfChecker): many levels of
+// modest scales multiply past float's range, and the triangles would overflow or collapse.
+void checkComposedTransform(const std::string& path, int index, const glm::dmat4& M) {
+    const std::string pointer = "/nodes/" + std::to_string(index);
+    for (int c = 0; c < 3; ++c)
+        for (int r = 0; r < 3; ++r)
+            if (!(std::abs(M[c][r]) <= kMaxNodeScale))
+                throw GltfValueError(path, pointer, "the transform composed with its ancestors' scales by " + showNumber(M[c][r]) +
+                                                        ", outside [-1e+06, 1e+06] (as a node's own scale)");
+    for (int r = 0; r < 3; ++r)
+        if (!(std::abs(M[3][r]) <= kMaxNodeTranslation))
+            throw GltfValueError(path, pointer, "the transform composed with its ancestors' translates by " + showNumber(M[3][r]) +
+                                                    ", outside [-1e+09, 1e+09] (as a node's own translation)");
+}
+
+// Calls visit(node index, world transform) for every node under the roots, parents before children, in document
+// order. GltfChecker has made the hierarchy a forest at most kMaxNodeDepth deep, so each node is visited once; an
+// explicit stack replaces recursion (a deep hierarchy overflowed the call stack, issue 35).
+template <class Visit>
+void walkNodes(const std::string& path, const tinygltf::Model& m, const std::vector<int>& roots, Visit&& visit) {
+    std::vector<std::pair<int, glm::dmat4>> stack;
+    for (auto it = roots.rbegin(); it != roots.rend(); ++it) stack.emplace_back(*it, glm::dmat4(1.0));
+    size_t visits = 0;
+    while (!stack.empty()) {
+        const auto [index, parent] = stack.back();
+        stack.pop_back();
+        if (index < 0 || size_t(index) >= m.nodes.size() || ++visits > m.nodes.size())
+            throwMeshError(path, "the node hierarchy is not a set of trees");  // kept out by GltfChecker
+        const tinygltf::Node& node = m.nodes[size_t(index)];
+        const glm::dmat4 world = parent * localTransform(node);
+        checkComposedTransform(path, index, world);
+        visit(index, world);
+        for (auto c = node.children.rbegin(); c != node.children.rend(); ++c) stack.emplace_back(*c, world);
+    }
+}
+
 class GltfImporter {
 public:
     GltfImporter(const std::string& path, const tinygltf::Model& model, int materialFilter)
@@ -167,7 +739,9 @@ public:
         const std::vector<int> roots = rootNodes(m_);
         if (m_.nodes.empty())  // bare meshes, no node tree at all: take them untransformed
             for (size_t i = 0; i < m_.meshes.size(); ++i) addMesh(int(i), glm::dmat4(1.0));
-        for (int r : roots) visit(r, glm::dmat4(1.0), 0);
+        walkNodes(path_, m_, roots, [&](int index, const glm::dmat4& world) {
+            if (m_.nodes[size_t(index)].mesh >= 0) addMesh(m_.nodes[size_t(index)].mesh, world);
+        });
         if (parts_.empty())
             throwMeshError(path_, materialFilter_ != kAllGltfMaterials
                                       ? "no triangles with material " + std::to_string(materialFilter_)
@@ -181,41 +755,9 @@ private:
     int materialFilter_;
     std::vector<TriangleMesh> parts_;
     int skippedPrimitives_ = 0;
-
-public:
-    static glm::dmat4 localTransform(const tinygltf::Node& node) {
-        if (node.matrix.size() == 16) {
-            glm::dmat4 M;
-            for (int c = 0; c < 4; ++c)
-                for (int r = 0; r < 4; ++r) M[c][r] = node.matrix[size_t(c * 4 + r)];  // column-major
-            return M;
-        }
-        glm::dmat4 T(1.0), R(1.0), S(1.0);
-        if (node.translation.size() == 3)
-            T[3] = glm::dvec4(node.translation[0], node.translation[1], node.translation[2], 1.0);
-        if (node.rotation.size() == 4) {  // glTF stores (x, y, z, w)
-            glm::dquat q(node.rotation[3], node.rotation[0], node.rotation[1], node.rotation[2]);
-            R = glm::mat4_cast(glm::normalize(q));
-        }
-        if (node.scale.size() == 3) {
-            S[0][0] = node.scale[0];
-            S[1][1] = node.scale[1];
-            S[2][2] = node.scale[2];
-        }
-        return T * R * S;  // glTF: M = T * R * S
-    }
+    size_t instancedVertices_ = 0, instancedIndices_ = 0;  // over all node instances, bounded by kMaxInstancedElements
 
 private:
-
-    void visit(int nodeIndex, const glm::dmat4& parent, size_t depth) {
-        if (nodeIndex < 0 || size_t(nodeIndex) >= m_.nodes.size())
-            throwMeshError(path_, "node index " + std::to_string(nodeIndex) + " out of range");
-        if (depth > m_.nodes.size()) throwMeshError(path_, "node hierarchy contains a cycle");
-        const tinygltf::Node& node = m_.nodes[size_t(nodeIndex)];
-        glm::dmat4 M = parent * localTransform(node);
-        if (node.mesh >= 0) addMesh(node.mesh, M);
-        for (int c : node.children) visit(c, M, depth + 1);
-    }
 
     AccessorView view(int accessorIndex, const char* what, std::initializer_list<int> types) const {
         if (accessorIndex < 0 || size_t(accessorIndex) >= m_.accessors.size())
@@ -274,10 +816,18 @@ private:
             TriangleMesh part;
             AccessorView pos = view(attr("POSITION"), "POSITION", {TINYGLTF_TYPE_VEC3});
             size_t n = pos.count;
+            // Each node instance is a copy: a small file can instance a mesh many times over (nodes x primitives).
+            instancedVertices_ += n;
+            if (instancedVertices_ > kMaxInstancedElements)
+                throwMeshError(path_, "the node tree instances more than " + std::to_string(kMaxInstancedElements) +
+                                          " vertices (2^26, the bound of one glTF file)");
             part.positions.resize(n);
             for (size_t i = 0; i < n; ++i) {
                 glm::dvec4 p = M * glm::dvec4(pos.component(i, 0), pos.component(i, 1), pos.component(i, 2), 1.0);
                 part.positions[i] = Vec3(p);
+                if (!isFinite(part.positions[i]))
+                    throw GltfValueError(path_, "/accessors/" + std::to_string(attr("POSITION")),
+                                         "vertex " + std::to_string(i) + " is not a finite float once placed by its node (valid: |x| < 3.4e+38)");
             }
             if (attr("NORMAL") >= 0) {
                 AccessorView nv = view(attr("NORMAL"), "NORMAL", {TINYGLTF_TYPE_VEC3});
@@ -317,6 +867,10 @@ private:
             std::vector<uint32_t> idx;
             if (prim.indices >= 0) {
                 AccessorView iv = view(prim.indices, "indices", {TINYGLTF_TYPE_SCALAR});
+                instancedIndices_ += iv.count;
+                if (instancedIndices_ > kMaxInstancedElements)
+                    throwMeshError(path_, "the node tree instances more than " + std::to_string(kMaxInstancedElements) +
+                                              " vertex indices (2^26, the bound of one glTF file)");
                 if (iv.componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE &&
                     iv.componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
                     iv.componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT)
@@ -363,7 +917,36 @@ BufferAccess accessFor(const std::string& path) {
     return access;
 }
 
+// Reads the file (bounded), checks its JSON (nesting depth, then GltfChecker) and only then hands it to tinygltf, which
+// reads the buffers (through the confined file callbacks above) and the images.
 void loadModel(const std::string& path, bool binary, bool keepImages, tinygltf::Model& model) {
+    std::error_code ec;
+    const uintmax_t size = std::filesystem::file_size(path, ec), limit = binary ? kMaxGlbBytes : kMaxGltfJsonBytes;
+    if (ec) throwMeshError(path, "cannot read the file: " + ec.message());
+    if (size > limit)
+        throwMeshError(path, std::to_string(size) + " bytes is larger than a " + (binary ? "GLB file may be (4 GiB)" : ".gltf (JSON text) may be (256 MiB)"));
+    std::string bytes(size_t(size), '\0');
+    std::ifstream in(path, std::ios::binary);
+    if (!in || (size > 0 && !in.read(bytes.data(), std::streamsize(size)))) throwMeshError(path, "cannot read the file");
+    // The JSON text: the whole .gltf, or a GLB's first chunk (12-byte header, then chunk length and type).
+    size_t jsonBegin = 0, jsonSize = bytes.size();
+    if (binary) {
+        uint32_t chunk = 0;
+        if (bytes.size() >= 20) std::memcpy(&chunk, bytes.data() + 12, 4);
+        jsonBegin = std::min<size_t>(20, bytes.size());
+        jsonSize = std::min<size_t>(chunk, bytes.size() - jsonBegin);
+    }
+    if (size_t deep = tooDeepAt(bytes.data() + jsonBegin, jsonSize, kMaxGltfJsonDepth); deep != std::string::npos)
+        throwMeshError(path, "the JSON nests deeper than " + std::to_string(kMaxGltfJsonDepth) + " levels (at byte " +
+                                 std::to_string(jsonBegin + deep) + ")");
+    Json doc;
+    try {
+        doc = Json::parse(bytes.begin() + std::ptrdiff_t(jsonBegin), bytes.begin() + std::ptrdiff_t(jsonBegin + jsonSize), nullptr, false);
+    } catch (const Json::exception&) {  // a number beyond double's range: tinygltf reports it below
+        doc = Json(Json::value_t::discarded);
+    }
+    if (!doc.is_discarded()) GltfChecker(path, doc).run();
+
     tinygltf::TinyGLTF loader;
     loader.SetImageLoader(keepImages ? &keepImageBytes : &ignoreImage, nullptr);
     BufferAccess access = accessFor(path);
@@ -371,8 +954,13 @@ void loadModel(const std::string& path, bool binary, bool keepImages, tinygltf::
     std::string err, warn;
     bool ok = false;
     try {
-        ok = binary ? loader.LoadBinaryFromFile(&model, &err, &warn, path)
-                    : loader.LoadASCIIFromFile(&model, &err, &warn, path);
+        if (bytes.empty())
+            err = "empty file";
+        else if (binary)
+            ok = loader.LoadBinaryFromMemory(&model, &err, &warn, reinterpret_cast<const unsigned char*>(bytes.data()),
+                                             unsigned(bytes.size()), access.baseDir);
+        else
+            ok = loader.LoadASCIIFromString(&model, &err, &warn, bytes.data(), unsigned(bytes.size()), access.baseDir);
     } catch (const std::exception& e) {
         // tinygltf indexes some GLB headers with vector::at (found by fuzz_mesh): a parse error like any other.
         throwMeshError(path, std::string("glTF parse error: ") + e.what());
@@ -381,6 +969,7 @@ void loadModel(const std::string& path, bool binary, bool keepImages, tinygltf::
         throwMeshError(path, "a buffer URI leads outside the glTF file's folder; buffers are read only from that folder "
                              "and from the folders listed in SPECULA_RESOURCE_PATH (docs/scene-format.md)");
     if (!ok) throwMeshError(path, "glTF parse error: " + (err.empty() ? std::string("unknown error") : trimmed(err)));
+    if (doc.is_discarded()) throwMeshError(path, "glTF parse error: not valid JSON");  // tinygltf should have said so
 }
 }  // namespace
 
@@ -468,26 +1057,20 @@ GltfSceneInfo describeGltfScene(const std::string& path, bool binary,
     // Walk the instanced node tree: cameras, lights, and which materials triangles use, with world bounds.
     std::vector<char> used(m.materials.size() + 1, 0);  // [0] = no material
     bool any = false;
-    std::vector<std::pair<int, glm::dmat4>> stack;
-    for (int r : rootNodes(m)) stack.emplace_back(r, glm::dmat4(1.0));
+    std::vector<int> roots = rootNodes(m);
     // Bare meshes without any node are taken untransformed, as the mesh loader does: a node of each, for the walk.
     if (m.nodes.empty() && !m.meshes.empty()) {
         for (size_t i = 0; i < m.meshes.size(); ++i) {
             tinygltf::Node n;
             n.mesh = int(i);
             m.nodes.push_back(n);
-            stack.emplace_back(int(i), glm::dmat4(1.0));
+            roots.push_back(int(i));
         }
     }
-    size_t visits = 0;
-    while (!stack.empty()) {
-        auto [index, parent] = stack.back();
-        stack.pop_back();
-        if (index < 0 || size_t(index) >= m.nodes.size()) throwMeshError(path, "node index " + std::to_string(index) + " out of range");
-        if (++visits > 4 * m.nodes.size() + 16) throwMeshError(path, "node hierarchy contains a cycle");
+    walkNodes(path, m, roots, [&](int index, const glm::dmat4& M) {
         const tinygltf::Node& node = m.nodes[size_t(index)];
-        const glm::dmat4 M = parent * GltfImporter::localTransform(node);
-        if (node.camera >= 0 && size_t(node.camera) < m.cameras.size() && m.cameras[size_t(node.camera)].type == "perspective") {
+        // GltfChecker has checked every index and value read here.
+        if (node.camera >= 0 && m.cameras[size_t(node.camera)].type == "perspective") {
             const auto& pc = m.cameras[size_t(node.camera)].perspective;
             info.cameras.push_back({M, pc.yfov, pc.aspectRatio, m.cameras[size_t(node.camera)].name});
         }
@@ -499,26 +1082,29 @@ GltfSceneInfo describeGltfScene(const std::string& path, bool binary,
                                        l.spot.outerConeAngle, M});
             }
         }
-        if (node.mesh >= 0 && size_t(node.mesh) < m.meshes.size())
-            for (const tinygltf::Primitive& prim : m.meshes[size_t(node.mesh)].primitives) {
-                if (prim.mode != -1 && prim.mode != TINYGLTF_MODE_TRIANGLES) continue;
-                const int mat = prim.material >= 0 && size_t(prim.material) < m.materials.size() ? prim.material : -1;
-                used[size_t(mat + 1)] = 1;
-                auto pos = prim.attributes.find("POSITION");
-                if (pos == prim.attributes.end() || pos->second < 0 || size_t(pos->second) >= m.accessors.size()) continue;
-                const tinygltf::Accessor& acc = m.accessors[size_t(pos->second)];
-                if (acc.minValues.size() != 3 || acc.maxValues.size() != 3) continue;
-                for (int c = 0; c < 8; ++c) {  // the accessor's box corners, transformed
-                    const glm::dvec4 p = M * glm::dvec4(c & 1 ? acc.maxValues[0] : acc.minValues[0],
-                                                        c & 2 ? acc.maxValues[1] : acc.minValues[1],
-                                                        c & 4 ? acc.maxValues[2] : acc.minValues[2], 1.0);
-                    info.boundsMin = any ? glm::min(info.boundsMin, Vec3(p)) : Vec3(p);
-                    info.boundsMax = any ? glm::max(info.boundsMax, Vec3(p)) : Vec3(p);
-                    any = true;
-                }
+        if (node.mesh < 0) return;
+        for (const tinygltf::Primitive& prim : m.meshes[size_t(node.mesh)].primitives) {
+            if (prim.mode != -1 && prim.mode != TINYGLTF_MODE_TRIANGLES) continue;
+            const int mat = prim.material >= 0 && size_t(prim.material) < m.materials.size() ? prim.material : -1;
+            used[size_t(mat + 1)] = 1;
+            auto pos = prim.attributes.find("POSITION");
+            if (pos == prim.attributes.end() || pos->second < 0 || size_t(pos->second) >= m.accessors.size()) continue;
+            const tinygltf::Accessor& acc = m.accessors[size_t(pos->second)];
+            if (acc.minValues.size() != 3 || acc.maxValues.size() != 3) continue;
+            for (int c = 0; c < 8; ++c) {  // the accessor's box corners, transformed
+                const glm::dvec4 p = M * glm::dvec4(c & 1 ? acc.maxValues[0] : acc.minValues[0],
+                                                    c & 2 ? acc.maxValues[1] : acc.minValues[1],
+                                                    c & 4 ? acc.maxValues[2] : acc.minValues[2], 1.0);
+                if (!isFinite(Vec3(p)))
+                    throw GltfValueError(path, "/accessors/" + std::to_string(pos->second) + "/max",
+                                         "the POSITION bounds min/max placed by node " + std::to_string(index) +
+                                             " are beyond float's range (valid: |x| < 3.4e+38)");
+                info.boundsMin = any ? glm::min(info.boundsMin, Vec3(p)) : Vec3(p);
+                info.boundsMax = any ? glm::max(info.boundsMax, Vec3(p)) : Vec3(p);
+                any = true;
             }
-        for (int c : node.children) stack.emplace_back(c, M);
-    }
+        }
+    });
     info.hasBounds = any;
     for (size_t k = 0; k < used.size(); ++k)
         if (used[k]) info.usedMaterials.push_back(int(k) - 1);

@@ -24,6 +24,15 @@ struct MeshShading {
     float smoothAngleDegrees = 30.f;  // Auto: faces meeting at a larger angle keep a crease
 };
 
+// A glTF value that the glTF 2.0 specification (or the schema of an extension Specula reads) does not allow, or that
+// is beyond Specula's bounds (issue 35): what() is "cannot load mesh '<file>': <pointer>: <reason>", where pointer is
+// a JSON pointer into the glTF's JSON ("/cameras/0/perspective/yfov") and reason names the value and its valid range.
+// The glTF scene import turns it into an InputError (exit 1) at "<file>#<pointer>".
+struct GltfValueError : MeshLoadError {
+    GltfValueError(const std::string& file, const std::string& pointer, const std::string& reason);
+    std::string file, pointer, reason;
+};
+
 const char* attributeSourceName(MeshAttributeSources::Source s);
 
 constexpr int kAllGltfMaterials = -2;  // loadMesh's gltfMaterial: every primitive of a glTF file
@@ -31,6 +40,9 @@ constexpr int kAllGltfMaterials = -2;  // loadMesh's gltfMaterial: every primiti
 // A glTF file's cameras, punctual lights and metallic-roughness materials (glTF's y-up world space), for the scene
 // import (core/scene/gltf_scene.h). Textures are files written by the importer.
 struct GltfSceneInfo {
+    // The imported scene's image: kImageHeight rows and round(kImageHeight x aspectRatio) columns, the camera's
+    // aspectRatio being checked to give kMinImageWidth to kMaxImageWidth (gltf_loader.cpp).
+    static constexpr int kImageHeight = 540, kMinImageWidth = 16, kMaxImageWidth = 8192;
     struct Camera {
         glm::dmat4 world;
         double yfov = 0.7, aspect = 0.0;  // radians; 0: unspecified

@@ -152,6 +152,10 @@ nlohmann::json gltfSceneDocument(const std::string& path) {
     GltfSceneInfo info;
     try {
         info = detail::describeGltfScene(path, lowerExtension(path) == ".glb", &saveImage);
+    } catch (const GltfValueError& e) {
+        // A value out of range is bad input like a scene's (exit 1), named by the glTF file and the JSON pointer into
+        // it (RFC 6901's URI fragment form): "model.gltf#/cameras/0/perspective/yfov: 0 is outside (0, 3.14159) ...".
+        throw InputError(path + "#" + e.pointer, e.reason);
     } catch (const MeshLoadError& e) {
         throw IoError(e.what());
     }
@@ -177,13 +181,16 @@ nlohmann::json gltfSceneDocument(const std::string& path) {
     doc["shapes"] = shapes;
 
     // Camera: the first one of the scene, else one framing the bounds from the front, above and to the right.
-    int width = 960, height = 540;
+    int width = 960, height = GltfSceneInfo::kImageHeight;
     if (!info.cameras.empty()) {
         const GltfSceneInfo::Camera& c = info.cameras.front();
         const glm::dmat3 R(c.world);
         const Vec3 position = zUp(glm::dvec3(c.world[3])), forward = glm::normalize(zUp(R * glm::dvec3(0, 0, -1)));
         const Vec3 up = glm::normalize(zUp(R * glm::dvec3(0, 1, 0)));
-        if (c.aspect > 0.0) width = std::clamp(int(std::lround(height * c.aspect)), 16, 8192);
+        // aspectRatio is checked to give 16 to 8192 columns (gltf_loader.cpp GltfChecker); the clamp only guards that.
+        if (c.aspect > 0.0)
+            width = int(std::clamp(std::round(height * c.aspect), double(GltfSceneInfo::kMinImageWidth),
+                                   double(GltfSceneInfo::kMaxImageWidth)));
         doc["camera"] = {{"position", vec(position)}, {"look_at", vec(position + forward)}, {"up", vec(up)},
                          {"fov", std::clamp(c.yfov * 180.0 / kPiD, 0.1, 179.0)}, {"fov_axis", "y"}};
     } else {
