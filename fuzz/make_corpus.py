@@ -77,6 +77,32 @@ def gltf(binary):
             struct.pack("<I4s", len(buf), b"BIN\0") + buf)
 
 
+GLTF_SPLIT = b"\n--8<--\n"  # fuzz_gltf_scene.cpp kSeparator: the scene, then buffer.bin, then image.png
+
+
+def gltf_scene_seeds(out):
+    """fuzz_gltf_scene: byte 0 picks .gltf/.glb; the parts are the scene, buffer.bin and image.png (issue 35)."""
+    data = os.path.join(ROOT, "tests", "unit", "data", "gltf")
+    with open(os.path.join(data, "triangle.gltf"), "rb") as f:
+        put(out, "fuzz_gltf_scene", b"\0" + f.read())
+    with open(os.path.join(data, "triangle_external.gltf"), "rb") as f:
+        external = f.read().replace(b'"triangle.bin"', b'"buffer.bin"')
+    with open(os.path.join(data, "triangle.bin"), "rb") as f:
+        bin_data = f.read()
+    with open(os.path.join(data, "checker.png"), "rb") as f:
+        png = f.read()
+    put(out, "fuzz_gltf_scene", b"\0" + external + GLTF_SPLIT + bin_data)
+    # The same triangle with a base colour texture from image.png.
+    doc = json.loads(external)
+    doc["images"] = [{"uri": "image.png"}]
+    doc["textures"] = [{"source": 0}]
+    doc["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = {"index": 0}
+    put(out, "fuzz_gltf_scene", b"\0" + json.dumps(doc).encode() + GLTF_SPLIT + bin_data + GLTF_SPLIT + png)
+    put(out, "fuzz_gltf_scene", b"\1" + gltf(True))
+    with open(os.path.join(data, "scene.gltf"), "rb") as f:  # its images are checker.png and bumps.png: both absent
+        put(out, "fuzz_gltf_scene", b"\0" + f.read())
+
+
 def images(out):
     try:
         import OpenImageIO as oiio
@@ -129,6 +155,7 @@ def main():
         put(out, "fuzz_mesh", b"\1" + ply(fmt))
     put(out, "fuzz_mesh", b"\2" + gltf(False))
     put(out, "fuzz_mesh", b"\3" + gltf(True))
+    gltf_scene_seeds(out)
     for dirpath, _, files in os.walk(os.path.join(ROOT, "examples")):
         for name in sorted(files):
             ext = name.rsplit(".", 1)[-1].lower()
