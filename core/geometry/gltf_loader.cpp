@@ -432,7 +432,6 @@ private:
             if (const Json* o = object(m, p, "occlusionTexture")) number(*o, key(p, "occlusionTexture"), "strength", unit, "occlusion strength");
             textureInfo(m, p, "emissiveTexture");
             numbers(m, p, "emissiveFactor", 3, unit, "linear RGB");
-            number(m, p, "alphaCutoff", Range{0, 1}, "alpha threshold");
             const Json* ext = object(m, p, "extensions");
             if (!ext) continue;
             const std::string ep = key(p, "extensions");
