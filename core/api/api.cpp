@@ -4,6 +4,7 @@
 
 #include "core/api/node_catalog.h"
 #include "core/api/specula.h"
+#include "core/util/input_files.h"
 #include "core/codegen/glsl_emitter.h"
 #include "core/codegen/glsl_manifest.h"
 #include "core/graph/graph.h"
@@ -82,7 +83,15 @@ void LoadOptions::setLimit(const std::string& name, int64_t value) {
 
 namespace {
 
+// The options' ranges are the CLI's (core/api/specula.h option_rules); 0 (or a negative seed) keeps the scene's.
 SceneOverrides overridesOf(const LoadOptions& o) {
+    if (o.spp != 0) checkOption(option_rules::spp, o.spp);
+    if (o.seed >= 0) checkOption(option_rules::seed, double(o.seed));
+    if (o.width != 0 || o.height != 0) {
+        checkOption(option_rules::resolutionSide, o.width);
+        checkOption(option_rules::resolutionSide, o.height);
+    }
+    if (o.hasFrame) checkOption(option_rules::frame, o.frame);
     SceneOverrides ov;
     ov.spp = o.spp;
     ov.seed = o.seed;
@@ -163,13 +172,17 @@ struct Scene::Impl {
     specula::Scene scene;
     LoadOptions options;        // re-applied when setValue re-loads
     std::string name;           // for messages
+    std::vector<std::string> inputs;  // every file the load read (the scene, textures, meshes): never an output
 };
 
 namespace {
 std::unique_ptr<Scene::Impl> loadImpl(const std::string& text, const std::string& baseDir, const LoadOptions& o,
                                       const std::string& name, const std::string& path) {
     auto impl = std::make_unique<Scene::Impl>();
+    InputFileScope reads;  // what the loader opens, remembered for writeOutputs (core/util/input_files.h)
     impl->scene = loadSceneFromString(text, baseDir.empty() ? "." : baseDir, overridesOf(o), name);
+    impl->inputs = notedInputFiles();
+    if (!path.empty()) impl->inputs.push_back(path);
     impl->doc = Json::parse(text);  // valid: the loader accepted it
     impl->baseDir = baseDir.empty() ? "." : baseDir;
     impl->path = path;
@@ -186,13 +199,10 @@ Scene& Scene::operator=(Scene&&) noexcept = default;
 
 Scene Scene::fromFile(const std::string& path, const LoadOptions& opts) {
     return guarded([&] {
-        std::ifstream f(path, std::ios::binary);
-        if (!f) throw Error(ErrorCode::Io, "", "cannot open scene '" + path + "'");
-        std::stringstream ss;
-        ss << f.rdbuf();
+        const std::string text = readJsonText(path);  // bounded: /dev/zero is bad input, not a hang
         std::string base = fs::path(path).parent_path().string();
         Scene s;
-        s.impl_ = loadImpl(ss.str(), base, opts, path, path);
+        s.impl_ = loadImpl(text, base, opts, path, path);
         return s;
     });
 }
@@ -369,6 +379,7 @@ RenderJob Scene::renderAsync(const RenderOptions& opts, TileCallback onTile) con
         job.impl_ = std::make_unique<RenderJob::Impl>();
         RenderJob::Impl* j = job.impl_.get();
         const specula::Scene* scene = &impl_->scene;
+        checkOption(option_rules::threads, opts.threads);
         int threads = opts.threads;
         uint64_t maxMemory = opts.maxMemoryBytes;
         j->worker = std::thread([j, scene, threads, maxMemory, cb = std::move(onTile)] {
@@ -408,6 +419,8 @@ RenderJob Scene::renderAsync(const RenderOptions& opts, TileCallback onTile) con
 WrittenOutputs Scene::writeOutputs(const RenderResult& result, const std::string& exrPath) const {
     return guarded([&] {
         checkOutputPath(exrPath, impl_->path);
+        for (const std::string& out : {exrPath, fs::path(exrPath).replace_extension(".png").string(), partialOutputPath(exrPath)})
+            refuseOverwritingInputs(out, impl_->inputs, "output");
         specula::ImageSet images = result.impl_->images;
         WrittenFiles w;
         try {

@@ -1,6 +1,8 @@
 // Front-end policies of libspecula (core/api/specula.h).
 #include "core/api/specula.h"
 
+#include "core/util/input_files.h"
+
 #include <nlohmann/json.hpp>
 
 #include <cctype>
@@ -75,12 +77,7 @@ bool samePath(const std::string& a, const std::string& b) {
 }  // namespace
 
 void refuseOverwritingInput(const std::string& output, const std::vector<std::string>& inputs, const std::string& option) {
-    if (output.empty()) return;
-    for (const std::string& in : inputs) {
-        std::error_code ec;
-        if (!in.empty() && fs::exists(output, ec) && fs::equivalent(output, in, ec) && !ec)
-            throw Error(ErrorCode::Usage, "", option + " '" + output + "' is the input file '" + in + "'");
-    }
+    if (!output.empty()) refuseOverwritingInputs(output, inputs, option);
 }
 
 void checkOutputPath(const std::string& exrPath, const std::string& inputPath) {
@@ -109,6 +106,16 @@ WrittenFiles writeRenderResult(const std::string& exrPath, const Scene& scene, I
         return w;
     }
     return writeRenderOutputs(exrPath, scene, images);
+}
+
+void checkOption(const OptionRule& rule, double value) {
+    if (value >= rule.min && value <= rule.max) return;  // false for NaN
+    auto text = [](double v) {
+        char buf[32];
+        std::snprintf(buf, sizeof buf, "%.10g", v);
+        return std::string(buf);
+    };
+    throw Error(ErrorCode::Usage, "", std::string(rule.name) + " " + text(value) + " is outside " + text(rule.min) + ".." + text(rule.max));
 }
 
 int exitCodeFor(const std::exception& e) {

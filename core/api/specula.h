@@ -43,6 +43,26 @@ void refuseOverwritingInput(const std::string& output, const std::vector<std::st
 // OUT.exr untouched. Throws IoError / ImageIoError.
 WrittenFiles writeRenderResult(const std::string& exrPath, const Scene& scene, ImageSet& images, const RenderStats& stats);
 
+// The one table of option ranges that every front end applies (issue 35): the CLI's checks are built from it and the
+// C++ API, the C ABI and the Python module call checkOption with it, so `--threads -3` and `threads = -3` are the same
+// usage error (exit 2, SPC_USAGE). 'name' is the CLI's option; the API names it the same way without dashes.
+struct OptionRule {
+    const char* name;
+    double min, max;  // inclusive; NaN is outside every range
+};
+namespace option_rules {
+inline constexpr OptionRule spp{"--spp", 1, 1 << 20};
+inline constexpr OptionRule threads{"--threads", 0, 1024};  // 0: all cores
+inline constexpr OptionRule seed{"--seed", 0, 2147483647};
+inline constexpr OptionRule frame{"--frame", -1000000, 1000000};
+inline constexpr OptionRule sampleBlock{"--sample-block", 0, 1 << 20};
+inline constexpr OptionRule resolutionSide{"--resolution", 1, 16384};  // either side
+inline constexpr OptionRule brushAngle{"--angle", -360, 360};         // normalmap, degrees
+inline constexpr OptionRule footprint{"--footprint", 0, 1e6};         // plot, d(uv) per pixel
+}  // namespace option_rules
+// Error(Usage) "<name> <value> is outside <min>..<max>" unless min <= value <= max.
+void checkOption(const OptionRule& rule, double value);
+
 // The exit code of an error reaching a front end (docs/cli.md): Error -> its code; std::invalid_argument
 // -> usage (2); anything else (a malformed value deep in a loader) -> bad input (1).
 int exitCodeFor(const std::exception& e);

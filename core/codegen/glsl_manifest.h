@@ -21,7 +21,9 @@ nlohmann::json glslManifest(const GlslModule& mod, const std::vector<graph::Reso
                             const std::vector<std::vector<std::string>>& levelFiles);
 
 // Writes every resource level of 'mod' as an RGBA float EXR (<resource name>_l<level>.exr; the EXR's bottom row is
-// GL row 0) and manifest.json into 'dir' (which must exist), each file atomically. Returns the manifest.
+// GL row 0) and manifest.json into 'dir' (which must exist; IoError otherwise), all written to temporaries and renamed
+// together, so a failed write (IoError) leaves the previous set. Error(Usage) before anything is written when a target
+// is a file the command read (core/util/input_files.h). Returns the manifest.
 nlohmann::json writeGlslResources(const GlslModule& mod, const std::vector<graph::ResourceImage>& images,
                                   const std::string& dir, const ColorConfig& color);
 

@@ -3,6 +3,7 @@
 #pragma once
 
 #include "core/math/math.h"
+#include "core/util/error.h"
 
 #include <cstdint>
 #include <map>
@@ -14,8 +15,9 @@ namespace specula {
 
 class ColorConfig;
 
-struct ImageIoError : std::runtime_error {
-    using std::runtime_error::runtime_error;
+// A file that cannot be read or written: an IoError, so every front end reports it with exit code 3 (docs/cli.md).
+struct ImageIoError : IoError {
+    using IoError::IoError;
 };
 
 // One AOV: 'channels' floats per pixel, rows top to bottom, linear values.

@@ -3,6 +3,7 @@
 #include "core/io/io_module.h"
 
 #include "core/util/error.h"
+#include "core/util/input_files.h"
 
 #include <algorithm>
 #include <dlfcn.h>
@@ -55,21 +56,37 @@ using io_module::table;
 // ---- core/io/image_io.h ---------------------------------------------------------------------------
 const AovBuffer* ImageSet::find(const std::string& name) const { return table().imageSetFind(*this, name); }
 void writeExr(const std::string& path, const ImageSet& images, const ColorConfig& color) {
+    refuseOverwritingInputs(path, {}, "output");
     table().writeExr(path, images, color);
 }
 void writePng(const std::string& path, const ImageSet& images, const ColorConfig& color, const std::string& view,
               float exposureStops) {
+    refuseOverwritingInputs(path, {}, "output");
     table().writePng(path, images, color, view, exposureStops);
 }
-ImageSet readImageSet(const std::string& path, int64_t maxPixels) { return table().readImageSet(path, maxPixels); }
+ImageSet readImageSet(const std::string& path, int64_t maxPixels) {
+    noteInputFile(path);
+    return table().readImageSet(path, maxPixels);
+}
 CompareResult compareImages(const std::string& a, const std::string& b, const std::string& aov, const std::string& diff) {
+    noteInputFile(a);
+    noteInputFile(b);
+    if (!diff.empty()) refuseOverwritingInputs(diff, {a, b}, "--diff");
     return table().compareImages(a, b, aov, diff);
 }
-void writeFileAtomic(const std::string& path, const std::string& bytes) { table().writeFileAtomic(path, bytes); }
+// Every writer refuses a target that this command read (core/util/input_files.h); a temporary is checked on commit.
+void writeFileAtomic(const std::string& path, const std::string& bytes) {
+    refuseOverwritingInputs(path, {}, "output");
+    table().writeFileAtomic(path, bytes);
+}
 std::string createTempFileNear(const std::string& path) { return table().createTempFileNear(path); }
-void commitTempFile(const std::string& tmp, const std::string& path) { table().commitTempFile(tmp, path); }
+void commitTempFile(const std::string& tmp, const std::string& path) {
+    refuseOverwritingInputs(path, {}, "output");
+    table().commitTempFile(tmp, path);
+}
 void writeImage8(const std::string& path, int width, int height, int channels, const float* pixels,
                  const std::string& description) {
+    refuseOverwritingInputs(path, {}, "output");
     table().writeImage8(path, width, height, channels, pixels, description);
 }
 bool drawText(float* rgb, int width, int height, int x, int y, const std::string& text, int pixelSize,
@@ -97,6 +114,7 @@ TextureHandle TextureStore::load(const std::string& path, const std::string& col
         std::lock_guard<std::mutex> lock(impl_->m);
         if (!impl_->real) impl_->real = table().textureCreate(impl_->color, impl_->maxSide);
     }
+    noteInputFile(path);
     return table().textureLoad(impl_->real, path, colorspace);
 }
 int TextureStore::maxSide() const { return std::clamp(impl_->maxSide, 1, 65536); }  // as the real store clamps it
@@ -122,7 +140,10 @@ NormalMap generateNormalMap(NormalMapKind kind, int size, uint64_t seed) {
 NormalMap generateBrushedNormalMap(int size, uint64_t seed, double angleDegrees, double* usedAngleDegrees) {
     return table().generateBrushedNormalMap(size, seed, angleDegrees, usedAngleDegrees);
 }
-void writeNormalMap(const NormalMap& map, const std::string& path) { table().writeNormalMap(map, path); }
+void writeNormalMap(const NormalMap& map, const std::string& path) {
+    refuseOverwritingInputs(path, {}, "output");
+    table().writeNormalMap(map, path);
+}
 uint64_t normalMapHash(const NormalMap& map) { return table().normalMapHash(map); }
 SlopeStats slopeStats(const NormalMap& map) { return table().slopeStats(map); }
 double SlopeStats::sigmaX() const { return table().slopeStat(*this, 0); }

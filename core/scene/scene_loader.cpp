@@ -10,6 +10,7 @@
 #include "core/scene/gltf_scene.h"
 #include "core/scene/json_reader.h"
 #include "core/texture/texture_store.h"
+#include "core/util/input_files.h"
 
 #include <glm/gtc/matrix_transform.hpp>
 
@@ -128,7 +129,7 @@ Mat4 readTransform(const JsonReader& parent) {
     if (r.has("matrix")) {
         if (r.has("translate") || r.has("rotate") || r.has("scale"))
             r.fail("matrix", "'matrix' cannot be combined with translate/rotate/scale");
-        auto m = r.numbers("matrix", 16, {}, -1e30f, 1e30f);
+        auto m = r.numbers("matrix", 16, {}, -kMaxSceneCoordinate, kMaxSceneCoordinate);
         Mat4 M;
         for (int row = 0; row < 4; ++row)
             for (int col = 0; col < 4; ++col) M[col][row] = m[size_t(row) * 4 + col];  // row-major in JSON
@@ -162,6 +163,29 @@ void transformMesh(ShapeInstance& sh, const Mat4& M) {
     }
     if (glm::determinant(lin) < 0.f)  // mirrored: keep counter-clockwise winding w.r.t. the normals
         for (auto& i : sh.mesh.indices) std::swap(i.y, i.z);
+}
+
+// Every world-space vertex of a shape within ±kMaxSceneCoordinate (json_reader.h): each number of a transform and a
+// size is bounded, but their product is not (a radius of 1e7 scaled by 1e7 reaches 1e14), and a mesh file's vertices
+// are not scene numbers at all. Named at the transform, else at the mesh file (a built-in shape without a transform
+// reaches at most 1e7).
+void checkWorldReach(const ShapeInstance& sh, const JsonReader& r, const std::string& type) {
+    float reach = 0.f;
+    bool nan = false;
+    for (const Vec3& p : sh.mesh.positions)
+        for (int c = 0; c < 3; ++c) {
+            nan = nan || std::isnan(p[c]);
+            reach = std::max(reach, std::abs(p[c]));
+        }
+    if (!nan && reach <= kMaxSceneCoordinate) return;
+    std::ostringstream where;
+    if (nan) reach = std::numeric_limits<float>::quiet_NaN();
+    where << reach;
+    const std::string key = r.has("transform") ? "transform" : type == "mesh" ? "file" : "";
+    r.fail(key, "the shape reaches " + where.str() + " scene units from the origin" +
+                    (r.has("transform") ? " after its transform" : "") +
+                    "; world coordinates are limited to [-1e+08, 1e+08]" +
+                    (key == "file" ? " (give the shape a transform that scales the mesh down)" : " (a smaller scale, size or translation)"));
 }
 
 int materialIndex(const Context& ctx, const JsonReader& r, const std::string& key) {
@@ -267,6 +291,7 @@ void readShape(const Json& j, const std::string& ptr, Context& ctx) {
     // shapes lose their exact-surface projection there (docs/preview.md).
     if (ctx.scene->render.integrator != IntegratorKind::Raster) sh.surface = b.surface;
     transformMesh(sh, readTransform(r));
+    checkWorldReach(sh, r, type);
     ctx.scene->shapes.push_back(std::move(sh));
 }
 
@@ -649,13 +674,11 @@ Scene loadSceneFromString(const std::string& text, const std::string& baseDir, c
 // A scene is JSON text; anything larger is a wrong file (a mesh, /dev/zero), read no further than this.
 constexpr size_t kMaxSceneBytes = size_t(256) << 20;
 
-Scene loadScene(const std::string& path, const SceneOverrides& overrides) {
+Json parseStrictJson(const std::string& text, const std::string& name, int maxDepth) { return parseJson(text, name, maxDepth); }
+
+std::string readJsonText(const std::string& path) {
     std::error_code ec;
     if (fs::is_directory(path, ec)) throw IoError("scene path '" + path + "' is a folder, not a scene file");
-    if (isGltfScenePath(path)) {  // a glTF file is imported as a scene (docs/scene-format.md "glTF scenes")
-        std::string base = fs::path(path).parent_path().string();
-        return loadSceneFromString(gltfSceneDocument(path).dump(), base.empty() ? "." : base, overrides, path);
-    }
     std::ifstream f(path, std::ios::binary);
     if (!f) throw IoError("cannot open scene file '" + path + "'");
     std::string text;
@@ -665,6 +688,19 @@ Scene loadScene(const std::string& path, const SceneOverrides& overrides) {
         if (text.size() > kMaxSceneBytes)
             throw InputError("", "scene file '" + path + "' is larger than 256 MiB: not a scene (a scene is JSON text)");
     }
+    if (f.bad()) throw IoError("cannot read '" + path + "'");
+    noteInputFile(path);
+    return text;
+}
+
+Scene loadScene(const std::string& path, const SceneOverrides& overrides) {
+    std::error_code ec;
+    if (fs::is_directory(path, ec)) throw IoError("scene path '" + path + "' is a folder, not a scene file");
+    if (isGltfScenePath(path)) {  // a glTF file is imported as a scene (docs/scene-format.md "glTF scenes")
+        std::string base = fs::path(path).parent_path().string();
+        return loadSceneFromString(gltfSceneDocument(path).dump(), base.empty() ? "." : base, overrides, path);
+    }
+    const std::string text = readJsonText(path);
     std::string base = fs::path(path).parent_path().string();
     if (base.empty()) base = ".";
     return loadSceneFromString(text, base, overrides, path);

@@ -2,6 +2,7 @@
 // InputError naming the JSON pointer and the nearest valid key; missing files are IoErrors.
 #pragma once
 
+#include "core/scene/json_reader.h"
 #include "core/scene/scene.h"
 #include "core/util/error.h"
 
@@ -44,6 +45,14 @@ Scene loadScene(const std::string& path, const SceneOverrides& overrides = {});
 // Same from JSON text; baseDir resolves relative paths, 'name' is used in messages.
 Scene loadSceneFromString(const std::string& text, const std::string& baseDir, const SceneOverrides& overrides = {},
                           const std::string& name = "<string>");
+
+// The strict JSON of scene and material files, for every reader of them (the scene loader, `specula glsl/bsdf/plot`,
+// `bsdf --batch` lines): a key given twice in one object and nesting deeper than maxDepth (at most 64) are InputErrors
+// naming the JSON pointer; malformed text is an InputError naming name:line:column.
+Json parseStrictJson(const std::string& text, const std::string& name, int maxDepth = 64);
+// A JSON file's text, read no further than 256 MiB (InputError beyond: /dev/zero, a mesh); IoError for a folder or
+// an unreadable file.
+std::string readJsonText(const std::string& path);
 
 // One-line-per-item human summary (used by `specula info`).
 std::string describeScene(const Scene& scene);

@@ -11,8 +11,10 @@
 #include "core/graph/closure_util.h"
 #include "core/graph/graph_material.h"
 #include "core/io/image_io.h"
+#include "core/scene/scene_loader.h"
 #include "core/render/lobes/ggx.h"
 #include "core/texture/texture_store.h"
+#include "plugin/cli/cli_options.h"
 #include "plugin/cli/cli_output.h"
 #include "core/util/error.h"
 
@@ -20,6 +22,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <limits>
@@ -28,6 +31,8 @@
 #include <fstream>
 #include <memory>
 #include <sstream>
+#include <sys/stat.h>
+#include <unistd.h>
 
 namespace specula {
 namespace {
@@ -44,15 +49,9 @@ struct Loaded {
     std::string name, pointer, baseDir;
 };
 
+// The file is read as the scene loader reads it: at most 256 MiB, strict JSON (no key twice, nesting bounded).
 Loaded readMaterial(const std::string& file, const std::string& wanted) {
-    std::ifstream in(file);
-    if (!in) throw IoError("cannot read '" + file + "'");
-    json scene;
-    try {
-        in >> scene;
-    } catch (const json::exception& e) {
-        throw InputError("", std::string("invalid JSON: ") + e.what());
-    }
+    const json scene = parseStrictJson(readJsonText(file), file);
     if (!scene.is_object() || !scene.contains("materials") || !scene["materials"].is_object())
         throw InputError("/materials", "the file has no \"materials\" object");
     const json& mats = scene["materials"];
@@ -208,12 +207,19 @@ struct BsdfRequestArgs {
                 throw InputError("/" + k, "unknown query key '" + k + "'", nearestName(k, keys));
             const json& v = it.value();
             if (k == "material") {
+                if (!v.is_string()) throw InputError("/material", "'material' must be a string (a material name)");
                 material = v.get<std::string>();
             } else if (k == "light_distance") {
-                lightDistance = v.is_null() ? std::numeric_limits<float>::infinity() : v.get<float>();
+                // A double beyond float's range would be undefined as a float: refuse it here.
+                if (!v.is_null() && !(v.is_number() && v.get<double>() > 0.0 && v.get<double>() <= 1e30))
+                    throw InputError("/light_distance", "'light_distance' must be a number in (0, 1e30] or null (a direction)");
+                lightDistance = v.is_null() ? std::numeric_limits<float>::infinity() : float(v.get<double>());
             } else {
                 if (!v.is_array() || v.size() < 2 || v.size() > 3)
                     throw InputError("/" + k, "'" + k + "' must be an array of 2 or 3 numbers");
+                for (size_t i = 0; i < v.size(); ++i)
+                    if (!v[i].is_number() || !(std::fabs(v[i].get<double>()) <= 1e30))
+                        throw InputError("/" + k + "/" + std::to_string(i), "'" + k + "' must hold numbers in [-1e30, 1e30]");
                 // Full float precision: std::to_string's 6 decimals would flatten small differentials.
                 std::string t;
                 char buf[32];
@@ -293,6 +299,29 @@ json evaluateBsdf(MaterialCache& cache, const BsdfRequestArgs& r) {
             {"pdf", v.pdf}, {"lobes", lobes}};
 }
 
+// A --batch line is a short JSON object. A longer one (or an endless stream without a newline, /dev/zero) is answered
+// with an error once its first kMaxBatchLine bytes are read, and the batch ends there: finding the next line would
+// mean reading an input of no bound.
+constexpr size_t kMaxBatchLine = size_t(1) << 20;
+
+// The next line of 'in' without its newline; false at the end of the input. 'tooLong': more than kMaxBatchLine bytes
+// came without a newline (the line is not finished).
+bool readBatchLine(std::istream& in, std::string& line, bool& tooLong) {
+    line.clear();
+    tooLong = false;
+    std::streambuf* buf = in.rdbuf();
+    for (;;) {
+        const int c = buf->sbumpc();
+        if (c == std::char_traits<char>::eof()) return !line.empty();
+        if (c == '\n') return true;
+        if (line.size() == kMaxBatchLine) {
+            tooLong = true;
+            return true;
+        }
+        line.push_back(char(c));
+    }
+}
+
 }  // namespace
 
 void addGraphCommands(CLI::App& app, int& exitCode) {
@@ -313,7 +342,7 @@ void addGraphCommands(CLI::App& app, int& exitCode) {
     glsl->callback([=, &exitCode] {
         exitCode = run([&] {
             refuseOverwritingInput(*gOut, {*gFile}, "-o");
-            if (!outputFolderExists(*gOut)) throw IoError("output folder of '" + *gOut + "' does not exist");
+            requireOutputFolder(*gOut);
             Loaded l = readMaterial(*gFile, *gMat);
             graph::GraphDesc g = graph::parseGraph(l.material, l.pointer);
             codegen::GlslOptions opt;
@@ -329,6 +358,7 @@ void addGraphCommands(CLI::App& app, int& exitCode) {
                 MaterialInstance mi = instantiate(l);  // loads the textures the resources are made from
                 std::vector<graph::ResourceImage> images =
                     codegen::exportGlslResources(g, m, GraphLoadContext{mi.textures.get(), l.baseDir});
+                refuseOverwritingInput(*gOut, {*gFile}, "-o");  // now also against the textures just read
                 codegen::writeGlslResources(m, images, *gRes, *ColorConfig::load("builtin"));
             }
             writeFileAtomic(*gOut, m.source);
@@ -363,15 +393,25 @@ void addGraphCommands(CLI::App& app, int& exitCode) {
                 std::printf("%s\n", evaluateBsdf(cache, *b).dump().c_str());
                 return;
             }
-            // One process, one material load per material name; a bad line gets an error answer and sets exit 1.
+            // One process, one material load per material name; a bad line gets an error answer and sets exit 1, and
+            // the batch goes on: every answer is valid JSON whatever bytes the line held (NUL, invalid UTF-8).
+            if (!b->wo.empty() || !b->wi.empty())
+                throw UsageError("--wo/--wi give one query; with --batch every line gives its own \"wo\" and \"wi\" (the other "
+                                 "options are defaults for every line)");
+            struct stat st {};
+            if (::fstat(STDIN_FILENO, &st) == 0 && S_ISDIR(st.st_mode))
+                throw IoError("bsdf --batch: standard input is a folder, not a stream of JSON lines");
             MaterialCache cache(b->file);
             std::string line;
-            bool failed = false;
-            for (int n = 1; std::getline(std::cin, line); ++n) {
-                if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+            bool failed = false, tooLong = false;
+            for (int n = 1; readBatchLine(std::cin, line, tooLong); ++n) {
+                if (!tooLong && line.find_first_not_of(" \t\r") == std::string::npos) continue;
                 json answer;
                 try {
-                    json q = json::parse(line);
+                    if (tooLong)
+                        throw Error(ErrorCode::BadInput, "", "line " + std::to_string(n) + " is longer than " + std::to_string(kMaxBatchLine) +
+                                                 " bytes (a query is a short JSON object); the batch ends here");
+                    const json q = parseStrictJson(line, "line " + std::to_string(n), 8);
                     BsdfRequestArgs r = *b;
                     r.fromJson(q);
                     answer = evaluateBsdf(cache, r);
@@ -379,10 +419,13 @@ void addGraphCommands(CLI::App& app, int& exitCode) {
                     answer = {{"error", e.what()}, {"line", n}};
                     failed = true;
                 }
-                std::printf("%s\n", answer.dump().c_str());
+                // Bytes that are not UTF-8 (echoed by a parser's message) become U+FFFD rather than end the batch.
+                std::printf("%s\n", answer.dump(-1, ' ', false, json::error_handler_t::replace).c_str());
                 std::fflush(stdout);
+                if (tooLong) break;
             }
-            if (failed) throw InputError("", "some --batch queries failed (see their \"error\" answers)");
+            if (std::cin.bad()) throw IoError("bsdf --batch: cannot read standard input");
+            if (failed) throw Error(ErrorCode::BadInput, "", "some --batch queries failed (see their \"error\" answers)");
         });
     });
 
@@ -406,12 +449,14 @@ void addGraphCommands(CLI::App& app, int& exitCode) {
     // size sees; without one (all derivatives 0) they answer with their converged, analytic lobe.
     plot->add_option("--footprint", p->footprint,
                      "isotropic footprint DU: d(uv)/dx = (DU, 0), d(uv)/dy = (0, DU) (overrides --duvdx/--duvdy)")
-        ->check(CLI::PositiveNumber);
+        ->check(optionCheck(option_rules::footprint));
     plot->add_option("--raw", p->raw, "also write the float values as an EXR (beauty: f·cos RGB of the lobe panel; 'ndf' layer)");
     plot->callback([=, &exitCode] {
         exitCode = run([&] {
             refuseOverwritingInput(p->out, {p->file}, "-o");
             refuseOverwritingInput(p->raw, {p->file, p->out}, "--raw");
+            requireOutputFolder(p->out);  // both folders before any work: a missing one loses nothing
+            requireOutputFolder(p->raw);
             Vec3 wo = parseDirection(p->wo, "--wo");
             if (p->size < 16 || p->size > 4096) throw UsageError("--size must be in [16, 4096]");
             Loaded l = readMaterial(p->file, p->material);

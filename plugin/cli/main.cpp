@@ -2,7 +2,9 @@
 // over the library API (core/api/specula.h); exit codes are documented in docs/cli.md.
 #include "core/api/specula.h"
 #include "core/util/error.h"
+#include "core/util/input_files.h"
 #include "core/util/memory_budget.h"
+#include "plugin/cli/cli_options.h"
 #include "plugin/cli/cli_output.h"
 #include "plugin/cli/farm_command.h"
 #include "plugin/cli/graph_commands.h"
@@ -87,6 +89,8 @@ int reportError(const std::exception& e, int code) {
 }  // namespace
 
 int main(int argc, char** argv) {
+    // Every file the command reads is remembered by identity; no output of it may replace one (core/util/input_files.h).
+    InputFileScope inputs;
     CLI::App app{"Specula: physically based renderer for glints and filtered specular materials"};
     app.set_version_flag("--version", std::string("specula ") + SPECULA_VERSION);
     app.require_subcommand(1);
@@ -100,22 +104,22 @@ int main(int argc, char** argv) {
     render->add_option("scene", scenePath, "Scene file (JSON, format v1)")->required();
     render->add_option("-o,--output", outPath, "Output: OUT.exr (every AOV, with the viewed OUT.png beside it) or OUT.png "
                                                "(the viewed image only); default <scene name>.exr in the current folder");
-    render->add_option("--spp", spp, "Samples per pixel (overrides the scene)")->check(CLI::Range(1, 1 << 20));
-    render->add_option("--threads", threads, "Worker threads (default: all cores)")->check(CLI::Range(0, 1024));
+    render->add_option("--spp", spp, "Samples per pixel (overrides the scene)")->check(optionCheck(option_rules::spp));
+    render->add_option("--threads", threads, "Worker threads (default: all cores)")->check(optionCheck(option_rules::threads));
     std::string maxMemory;
     render->add_option("--max-memory", maxMemory,
                        "Refuse a render estimated to need more than SIZE bytes (4G, 512M; default: what the system allows)");
-    render->add_option("--seed", seed, "Sampler seed (overrides the scene)")->check(CLI::Range(int64_t(0), int64_t(2147483647)));
+    render->add_option("--seed", seed, "Sampler seed (overrides the scene)")->check(optionCheck(option_rules::seed));
     render->add_option("--resolution", resolution, "Image size WxH (overrides the scene)");
     render->add_option("--crop", crop, "Render only pixels x0,y0,x1,y1 (x1,y1 exclusive); output is the crop");
     int frame = 0, sampleBlock = -1;
     bool frameGiven = false;
     std::string sampleSplit;
     render->add_option("--frame", frame, "Animation frame to render (default: the scene's frame_start)")
-        ->check(CLI::Range(-1000000, 1000000))
+        ->check(optionCheck(option_rules::frame))
         ->each([&](const std::string&) { frameGiven = true; });
     render->add_option("--sample-block", sampleBlock, "Sum samples in blocks of N (render.sample_block; farm splits)")
-        ->check(CLI::Range(0, 1 << 20));
+        ->check(optionCheck(option_rules::sampleBlock));
     render->add_option("--sample-split", sampleSplit, "Render only sample block I of K (I/K), keeping sums: a farm piece");
     std::string areaLights;
     render->add_option("--area-lights", areaLights, "Quad lights: ltc (analytic where lobes can) or sampled (overrides render.area_lights)")
@@ -147,7 +151,7 @@ int main(int argc, char** argv) {
             exitCode = kExitUsage;
             return;
         }
-        if (!resolution.empty() && (ov.width < 1 || ov.height < 1 || ov.width > 16384 || ov.height > 16384)) {
+        if (!resolution.empty() && !(inRange(option_rules::resolutionSide, ov.width) && inRange(option_rules::resolutionSide, ov.height))) {
             std::fprintf(stderr, "specula: error: --resolution %s is outside 1x1..16384x16384\n", resolution.c_str());
             exitCode = kExitUsage;
             return;
@@ -192,6 +196,13 @@ int main(int argc, char** argv) {
         }
         for (const std::string& w : scene.warnings) std::fprintf(stderr, "specula: warning: %s\n", w.c_str());
         if (printCameraIfAsked(scene, shiftOpts)) return;
+        try {  // the scene is loaded: no output may replace a file it read (a texture, a mesh), checked before rendering
+            for (const std::string& out : {outPath, fs::path(outPath).replace_extension(".png").string(), partialOutputPath(outPath)})
+                refuseOverwritingInputs(out, {scenePath}, "-o");
+        } catch (const Error& e) {
+            exitCode = reportError(e, e.exitCode());
+            return;
+        }
         std::signal(SIGINT, onSigint);
         std::signal(SIGTERM, onSigint);
         RenderOptions opts;

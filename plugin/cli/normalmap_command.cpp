@@ -4,6 +4,7 @@
 
 #include "core/texture/normal_map_gen.h"
 #include "core/util/error.h"
+#include "plugin/cli/cli_options.h"
 #include "plugin/cli/cli_output.h"
 
 #include <CLI/CLI.hpp>
@@ -34,7 +35,8 @@ void addNormalmapCommand(CLI::App& app, int& exitCode) {
     cmd->add_option("-o,--output", o->out, "Output file: .exr (float) or .png (16-bit)")->required();
     auto* angle = cmd->add_option("--angle", o->angle,
                                   "Brush direction of --kind brushed, degrees from +u towards +v (default 26.565); the "
-                                  "nearest direction that keeps the tile seamless is used and printed");
+                                  "nearest direction that keeps the tile seamless is used and printed")
+                      ->check(optionCheck(option_rules::brushAngle));
     cmd->add_flag("--quiet", o->quiet, "Print nothing on success");
     cmd->callback([o, angle, &exitCode] {
         if (angle->count() > 0 && o->kind != "brushed") {

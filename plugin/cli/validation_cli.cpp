@@ -30,11 +30,13 @@ Scene loadSceneForRender(const std::string& path, const SceneOverrides& ov, cons
     double dx = 0, dy = 0;
     if (!parseCameraShift(o.shift, dx, dy))
         throw std::invalid_argument("--camera-shift-px expects DX,DY (two numbers), got '" + o.shift + "'");
-    std::ifstream f(path, std::ios::binary);
-    if (!f) return loadScene(path, ov);  // the loader's own message
-    std::stringstream ss;
-    ss << f.rdbuf();
-    nlohmann::json j = nlohmann::json::parse(ss.str(), nullptr, false);
+    std::string text;
+    try {
+        text = readJsonText(path);  // bounded (issue 35)
+    } catch (const std::exception&) {
+        return loadScene(path, ov);  // the loader's own message
+    }
+    nlohmann::json j = nlohmann::json::parse(text, nullptr, false);
     if (j.is_discarded() || !j.is_object() || !j.contains("camera")) return loadScene(path, ov);
     // The pixel is measured on the image that will be rendered: the scene's size unless --resolution overrides it
     // (the loader's defaults, RenderSettings, when the scene names none).

@@ -801,15 +801,12 @@ ImageSet PreviewRenderer::readBack() const {
 }
 
 PreviewScene loadPreviewScene(const std::string& path, const SceneOverrides& overrides) {
-    std::ifstream f(path, std::ios::binary);
-    if (!f) throw IoError("cannot open scene file '" + path + "'");
-    std::stringstream text;
-    text << f.rdbuf();
+    const std::string text = readJsonText(path);  // bounded, as every reader of scene files (issue 35)
     PreviewScene ps;
     ps.baseDir = std::filesystem::path(path).parent_path().string();
     if (ps.baseDir.empty()) ps.baseDir = ".";
-    ps.scene = loadSceneFromString(text.str(), ps.baseDir, overrides, path);
-    const nlohmann::json doc = nlohmann::json::parse(text.str());  // valid: the loader accepted it
+    ps.scene = loadSceneFromString(text, ps.baseDir, overrides, path);
+    const nlohmann::json doc = nlohmann::json::parse(text);  // valid: the loader accepted it
     if (doc.contains("materials")) ps.materials = doc["materials"];
     return ps;
 }
