@@ -297,6 +297,18 @@ int main(int argc, char** argv) {
         r2 = NULL;
     }
 
+    /* ---- option ranges: the CLI's table (core/api/specula.h option_rules), e.g. --threads 0..1024 (issue 35) ---- */
+    {
+        spc_render_options bad = SPC_RENDER_OPTIONS_INIT;
+        bad.threads = -3;
+        expectError(ctx, A.spc_render(ctx, scene, &bad, NULL, NULL, &r2), SPC_USAGE, NULL, "--threads -3 is outside 0..1024");
+        CHECK(r2 == NULL);
+        bad.threads = 1025;
+        expectError(ctx, A.spc_render(ctx, scene, &bad, NULL, NULL, &r2), SPC_USAGE, NULL, "--threads 1025 is outside");
+        CHECK(r2 == NULL);
+        printf("threads -3 and 1025: SPC_USAGE, as the CLI\n");
+    }
+
     /* ---- overrides by JSON pointer ---- */
     {
         spc_render_stats s;

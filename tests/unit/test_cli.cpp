@@ -330,6 +330,61 @@ TEST(Cli, BsdfDrivesTheShadingPointAndBatches) {
     EXPECT_NE(answers[2]["error"].get<std::string>().find("did you mean 'wi'"), std::string::npos) << answers[2].dump();
 }
 
+// Issue 35 class 7: a bad --batch line (a key twice, a NUL byte, bytes that are not UTF-8, a number beyond float) gets
+// its own error answer, valid JSON, and the lines after it are still answered, in order.
+TEST(Cli, BsdfBatchAnswersEveryLineAfterBadOnes) {
+    const std::string dir = test::tempDir("cli-batch");
+    test::writeFile(dir + "/m.json",
+                    R"({"materials": {"m": {"nodes": {"s": {"type": "bsdf.diffuse", "inputs": {"color": [0.5, 0.5, 0.5]}}}, "output": "@s.bsdf"}}})");
+    const std::string good = R"({"wo": [0, 0, 1], "wi": [0, 0, 1]})";
+    std::string lines = good + "\n" + R"({"wo": [0, 0, 1], "wo": [1, 0, 1], "wi": [0, 0, 1]})" + "\n";
+    lines += std::string("{\"wo\": [0, 0") + '\0' + ", 1], \"wi\": [0, 0, 1]}\n";
+    lines += "{\"wo\": \"\xff\xfe\", \"wi\": [0, 0, 1]}\n";
+    lines += R"({"wo": [0, 0, 1], "wi": [0, 0, 1], "light_distance": 1e300})" "\n" + good + "\n";
+    test::writeFile(dir + "/q.jsonl", lines);
+    std::string out;
+    EXPECT_EQ(test::runCli("bsdf " + q(dir + "/m.json") + " --batch < " + q(dir + "/q.jsonl"), &out), 1) << out;
+    std::istringstream in(out);
+    std::vector<nlohmann::json> answers;
+    for (std::string l; std::getline(in, l);)  // each answer is valid JSON; the closing error line is on stderr
+        if (l.rfind("specula: error:", 0) != 0) answers.push_back(nlohmann::json::parse(l));
+    ASSERT_EQ(answers.size(), 6u) << out;
+    for (size_t i : {size_t(0), size_t(5)}) EXPECT_NEAR(answers[i]["f"][0].get<double>(), 0.5 / M_PI, 1e-6) << answers[i];
+    const char* why[] = {"duplicate key 'wo'", "malformed JSON", "UTF-8", "/light_distance"};
+    for (size_t i = 1; i <= 4; ++i) {
+        ASSERT_TRUE(answers[i].contains("error")) << answers[i];
+        EXPECT_EQ(answers[i]["line"].get<int>(), int(i + 1));
+        EXPECT_NE(answers[i]["error"].get<std::string>().find(why[i - 1]), std::string::npos) << answers[i];
+    }
+}
+
+// Issue 35 class 4: outputs are compared with the inputs by identity, not by name: a hard link or a symbolic link to
+// the scene or to a texture it reads is refused (exit 2) before anything is rendered, and the input keeps its bytes.
+TEST(Cli, NoOutputReplacesAnInputUnderAnotherName) {
+    const std::string dir = test::tempDir("cli-identity");
+    ASSERT_EQ(test::runCli("normalmap --kind bumps --size 16 --quiet -o " + q(dir + "/t.png")), 0);
+    test::writeFile(dir + "/s.json", R"({"render": {"width": 16, "height": 12, "spp": 1}, "camera": {"position": [0, -4, 1], "look_at": [0, 0, 0]},
+ "materials": {"m": {"nodes": {"t": {"type": "texture.image", "inputs": {"file": "t.png", "colorspace": "raw"}},
+                               "s": {"type": "bsdf.diffuse", "inputs": {"color": "@t.color"}}}, "output": "@s.bsdf"}},
+ "shapes": [{"type": "quad", "size": [8, 8], "material": "m"}], "lights": [{"type": "point", "position": [0, 0, 3], "power": 50}]})");
+    const std::string texture = test::readFile(dir + "/t.png"), scene = test::readFile(dir + "/s.json");
+    fs::create_hard_link(dir + "/t.png", dir + "/hard.png");
+    fs::create_symlink("t.png", dir + "/soft.png");
+    fs::create_hard_link(dir + "/s.json", dir + "/scene_link.exr");
+    std::string out;
+    for (const char* target : {"hard.png", "soft.png"}) {
+        EXPECT_EQ(test::runCli("render " + q(dir + "/s.json") + " --progress none -o " + q(dir + "/" + target), &out), 2) << out;
+        EXPECT_NE(out.find("t.png"), std::string::npos) << out;
+        EXPECT_NE(out.find("is the input file"), std::string::npos) << out;
+    }
+    EXPECT_EQ(test::runCli("render " + q(dir + "/s.json") + " --progress none -o " + q(dir + "/scene_link.exr"), &out), 2) << out;
+    EXPECT_EQ(test::runCli("plot " + q(dir + "/s.json") + " --wo 0,0,1 -o " + q(dir + "/hard.png"), &out), 2) << out;
+    EXPECT_EQ(test::readFile(dir + "/t.png"), texture);
+    EXPECT_EQ(test::readFile(dir + "/s.json"), scene);
+    // A name that is only similar is no input: the render is written.
+    EXPECT_EQ(test::runCli("render " + q(dir + "/s.json") + " --progress none -o " + q(dir + "/t2.png"), &out), 0) << out;
+}
+
 // specula plot --raw writes the lobe panel's float values: a pixel equals specula bsdf for its direction.
 TEST(Cli, PlotRawValuesEqualBsdfQueries) {
     std::string dir = test::tempDir("cli-plot");
@@ -420,10 +475,11 @@ TEST(Cli, HostileInputsGetOneClearErrorAndWriteNothing) {
     EXPECT_EQ(test::runCli("bsdf " + q(dir + "/m.json") + " --wo 0,0,0 --wi 0,0,1", &out), 2) << out;
     EXPECT_NE(out.find("non-zero direction"), std::string::npos) << out;
     EXPECT_EQ(out.find("\"f\""), std::string::npos) << out;
-    // The documented maximum power 1e12 is accepted; a camera at the documented position limit 1e30 is valid.
+    // The documented maximum power 1e12 is accepted; a camera at the documented position limit 1e8 is valid
+    // (docs/scene-format.md "Float-safe bounds"; beyond it, hostile_catalogue_cache.json).
     std::string big = kSmallScene;
     big.replace(big.find("\"power\": 300"), 12, "\"power\": 1e12");
-    big.replace(big.find("[0, -4, 1]"), 10, "[0, -1e30, 1]");
+    big.replace(big.find("[0, -4, 1]"), 10, "[0, -1e8, 1]");
     test::writeFile(dir + "/big.json", big);
     EXPECT_EQ(test::runCli("info " + q(dir + "/big.json"), &out), 0) << out;
     // A folder as the scene: I/O error (3), not malformed JSON; /dev/zero: refused after 256 MiB, not read forever.
