@@ -10,12 +10,25 @@
 #include "core/util/error.h"
 
 #include <algorithm>
+#include <array>
+#include <cctype>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <set>
 #include <sstream>
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+extern char** environ;
 
 namespace fs = std::filesystem;
 
@@ -23,7 +36,64 @@ namespace specula::farm {
 
 namespace {
 
+// ---- checked text --------------------------------------------------------------------------------------------------
+
+// A value from a file or the command line as an error message shows it: quoted, control characters as \xNN, at most
+// 80 characters, so that every error stays one line whatever the input holds.
+std::string shown(const std::string& value) {
+    std::string out = "'";
+    size_t n = 0;
+    for (unsigned char c : value) {
+        if (++n > 80) {
+            out += "...";
+            break;
+        }
+        if (c < 0x20 || c == 0x7f) {
+            char hex[8];
+            std::snprintf(hex, sizeof hex, "\\x%02x", c);
+            out += hex;
+        } else {
+            out += char(c);
+        }
+    }
+    return out + "'";
+}
+
+bool hasControlCharacter(const std::string& s) {
+    return std::any_of(s.begin(), s.end(), [](char c) { return (unsigned char)c < 0x20 || c == 0x7f; });
+}
+
+// The whole of 'text' as an integer in [lo, hi]: no sign other than '-', no space, no fraction, no exponent.
+bool parseWhole(const std::string& text, long long lo, long long hi, long long& value) {
+    if (text.empty() || text.size() > 24) return false;
+    const char* end = text.data() + text.size();
+    const auto [ptr, ec] = std::from_chars(text.data(), end, value);
+    return ec == std::errc() && ptr == end && value >= lo && value <= hi;
+}
+
+bool parseWholeList(const std::string& text, char sep, size_t count, long long lo, long long hi, std::vector<long long>& out) {
+    out.clear();
+    size_t start = 0;
+    while (out.size() <= count) {
+        const size_t end = text.find(sep, start);
+        long long v = 0;
+        if (!parseWhole(text.substr(start, end == std::string::npos ? std::string::npos : end - start), lo, hi, v)) return false;
+        out.push_back(v);
+        if (end == std::string::npos) break;
+        start = end + 1;
+    }
+    return out.size() == count;
+}
+
 // ---- piece metadata ------------------------------------------------------------------------------------------------
+
+constexpr long long kMaxSide = 16384;     // the renderer's largest image side
+constexpr long long kMaxSpp = 1 << 20;    // render --spp's range
+constexpr long long kMaxSplits = 1 << 20;
+constexpr long long kIntMin = -2147483647LL - 1, kIntMax = 2147483647LL;
+// A piece's EXR holds at most 2^26 pixels of a few dozen float channels; a file beyond this is not a piece, and is
+// refused before any of it is read.
+constexpr uintmax_t kMaxPieceBytes = uintmax_t(64) << 30;
 
 struct Piece {
     std::string path;
@@ -40,32 +110,69 @@ std::string meta(const Piece& p, const std::string& key) {
     return it->second;
 }
 
-bool parseInts(const std::string& text, char sep, std::vector<long long>& out) {
-    out.clear();
-    std::stringstream ss(text);
-    std::string item;
-    while (std::getline(ss, item, sep)) {
-        try {
-            size_t used = 0;
-            out.push_back(std::stoll(item, &used));
-            if (used != item.size()) return false;
-        } catch (const std::exception&) {
-            return false;
-        }
-    }
-    return true;
+// A piece's integer attribute, parsed whole and inside [lo, hi]; otherwise one InputError naming the file, the
+// attribute and the range.
+long long metaInteger(const Piece& p, const std::string& key, long long lo, long long hi) {
+    const std::string text = meta(p, key);
+    long long v = 0;
+    if (!parseWhole(text, lo, hi, v))
+        throw InputError("merge", "'" + p.path + "' has specula:" + key + " " + shown(text) + ", not an integer in " +
+                                     std::to_string(lo) + " … " + std::to_string(hi));
+    return v;
 }
 
-constexpr long long kMaxSide = 16384;
+// Refuses, before anything is read, what cannot be a piece file: a missing path (IoError), a device such as /dev/zero,
+// a FIFO or a folder (IoError: reading them would never end or means nothing), a file too large, or one that cannot
+// be opened.
+void checkPieceFile(const std::string& path) {
+    std::error_code ec;
+    const fs::file_status st = fs::status(path, ec);
+    if (ec || !fs::exists(st)) throw IoError("merge: cannot read the piece '" + path + "': no such file");
+    if (fs::is_directory(st)) throw IoError("merge: the piece '" + path + "' is a folder, not an EXR file");
+    if (!fs::is_regular_file(st))
+        throw IoError("merge: the piece '" + path + "' is not a regular file (a device, FIFO or socket); pieces are EXR files");
+    const uintmax_t bytes = fs::file_size(path, ec);
+    if (ec) throw IoError("merge: cannot read the piece '" + path + "': " + ec.message());
+    if (bytes > kMaxPieceBytes)
+        throw InputError("merge", "'" + path + "' holds " + std::to_string(bytes) + " bytes, more than a piece can (at most 64 GiB)");
+    std::ifstream probe(path, std::ios::binary);
+    if (!probe) throw IoError("merge: cannot open the piece '" + path + "' for reading");
+}
+
+// The 'samples' layer of a sample split: one channel of whole numbers of valid samples, at most the split's block of
+// spp/K each (the merge divides by their sum; a negative, fractional, NaN or 1e30 count would make a wrong image).
+void checkSampleCounts(const Piece& p, long long block) {
+    const AovBuffer* samples = p.images.find("samples");
+    if (samples->channels() != 1)
+        throw InputError("merge", "'" + p.path + "' has a 'samples' layer of " + std::to_string(samples->channels()) +
+                                     " channels; a sample split's counts are one channel");
+    for (size_t i = 0; i < samples->pixels.size(); ++i) {
+        const float n = samples->pixels[i];
+        if (!(std::isfinite(n) && n >= 0.f && n <= float(block) && n == std::floor(n))) {
+            const size_t w = size_t(std::max(p.images.width, 1));
+            char value[32];
+            std::snprintf(value, sizeof value, "%g", double(n));
+            throw InputError("merge", "'" + p.path + "' has a sample count of " + value + " at pixel " + std::to_string(i % w) + "," +
+                                         std::to_string(i / w) + " of its 'samples' layer; counts are whole numbers in 0 … " +
+                                         std::to_string(block) + " (spp / splits)");
+        }
+    }
+}
 
 }  // namespace
 
 // ---- merge ---------------------------------------------------------------------------------------------------------
 
-MergeSummary mergePieces(const std::vector<std::string>& paths, const std::string& outPath, bool overwrite) {
+MergeSummary mergePieces(const std::vector<std::string>& paths, const std::string& outPath, bool overwrite, int64_t maxPiecePixels) {
     if (paths.empty()) throw InputError("merge", "merge needs at least one piece");
     if (fs::path(outPath).extension() != ".exr") throw InputError("merge", "merge writes an EXR: '" + outPath + "' does not end in .exr");
     std::error_code ec;
+    // The output's folder first: a missing one is known before any piece is read (docs/cli.md: exit 3).
+    const fs::path outDir = fs::path(outPath).parent_path().empty() ? fs::path(".") : fs::path(outPath).parent_path();
+    if (!fs::is_directory(outDir, ec))
+        throw IoError("merge: the output folder '" + outDir.string() + "' of '" + outPath + "' does not exist");
+    if (fs::exists(outPath, ec) && !fs::is_regular_file(outPath, ec))
+        throw IoError("merge: the output '" + outPath + "' exists and is not a file");
     for (const std::string& p : paths)
         if (fs::exists(outPath, ec) && fs::equivalent(p, outPath, ec))
             throw InputError("merge", "the output '" + outPath + "' is one of the pieces; choose another file");
@@ -74,42 +181,60 @@ MergeSummary mergePieces(const std::vector<std::string>& paths, const std::strin
 
     std::vector<Piece> pieces;
     for (const std::string& path : paths) {
+        checkPieceFile(path);
         Piece p;
         p.path = path;
-        p.images = readImageSet(path);
+        try {
+            p.images = readImageSet(path, maxPiecePixels);
+        } catch (const ImageIoError& e) {
+            throw InputError("merge", "'" + path + "' is not a Specula render piece: " + e.what());
+        }
         pieces.push_back(std::move(p));
     }
     const Piece& ref = pieces.front();
     MergeSummary sum;
     sum.sceneHash = meta(ref, "scene_hash");
     std::vector<long long> size;
-    if (!parseInts(meta(ref, "frame_size"), 'x', size) || size.size() != 2 || size[0] < 1 || size[1] < 1 ||
-        size[0] > kMaxSide || size[1] > kMaxSide)
-        throw InputError("merge", "'" + ref.path + "' has a malformed specula:frame_size '" + meta(ref, "frame_size") + "'");
+    if (!parseWholeList(meta(ref, "frame_size"), 'x', 2, 1, kMaxSide, size))
+        throw InputError("merge", "'" + ref.path + "' has specula:frame_size " + shown(meta(ref, "frame_size")) +
+                                     ", not WxH with each side in 1 … " + std::to_string(kMaxSide));
     sum.width = int(size[0]), sum.height = int(size[1]);
-    sum.frame = std::stoi(meta(ref, "frame"));
+    if (int64_t(sum.width) * sum.height > maxPiecePixels)
+        throw InputError("merge", "'" + ref.path + "' has specula:frame_size " + shown(meta(ref, "frame_size")) + ", more than " +
+                                     std::to_string(maxPiecePixels) + " pixels");
+    sum.frame = int(metaInteger(ref, "frame", kIntMin, kIntMax));
+    const long long spp = metaInteger(ref, "spp", 1, kMaxSpp);
+    (void)metaInteger(ref, "seed", 0, std::numeric_limits<long long>::max());
+    const long long block = metaInteger(ref, "sample_block", 1, spp);
     for (Piece& p : pieces) {
         for (const char* key : {"scene_hash", "frame", "frame_size", "spp", "seed", "sample_block"})
             if (meta(p, key) != meta(ref, key))
                 throw InputError("merge", "'" + p.path + "' belongs to another render than '" + ref.path + "' (specula:" + key +
-                                         " " + meta(p, key) + " against " + meta(ref, key) + ")");
+                                         " " + shown(meta(p, key)) + " against " + shown(meta(ref, key)) + ")");
         auto partial = p.images.metadata.find("specula:partial");
         if (partial != p.images.metadata.end() && partial->second == "true")
             throw InputError("merge", "'" + p.path + "' is a partial (interrupted) render; render that piece again");
         std::vector<long long> c;
-        if (!parseInts(meta(p, "crop"), ',', c) || c.size() != 4 || c[0] < 0 || c[1] < 0 || c[2] > sum.width ||
-            c[3] > sum.height || c[0] >= c[2] || c[1] >= c[3] || p.images.width != c[2] - c[0] || p.images.height != c[3] - c[1])
-            throw InputError("merge", "'" + p.path + "' has a crop window '" + meta(p, "crop") + "' that does not fit its " +
+        if (!parseWholeList(meta(p, "crop"), ',', 4, 0, kMaxSide, c) || c[2] > sum.width || c[3] > sum.height || c[0] >= c[2] ||
+            c[1] >= c[3] || p.images.width != c[2] - c[0] || p.images.height != c[3] - c[1])
+            throw InputError("merge", "'" + p.path + "' has specula:crop " + shown(meta(p, "crop")) + ", which does not fit its " +
                                      std::to_string(p.images.width) + "x" + std::to_string(p.images.height) + " pixels in the " +
-                                     std::to_string(sum.width) + "x" + std::to_string(sum.height) + " frame");
+                                     std::to_string(sum.width) + "x" + std::to_string(sum.height) + " frame (x0,y0,x1,y1 with x0 < x1 ≤ " +
+                                     std::to_string(sum.width) + ", y0 < y1 ≤ " + std::to_string(sum.height) + ")");
         p.x0 = int(c[0]), p.y0 = int(c[1]), p.x1 = int(c[2]), p.y1 = int(c[3]);
         auto split = p.images.metadata.find("specula:sample_split");
         if (split != p.images.metadata.end()) {
             std::vector<long long> s;
-            if (!parseInts(split->second, '/', s) || s.size() != 2 || s[1] < 2 || s[0] < 0 || s[0] >= s[1] || s[1] > (1 << 20))
-                throw InputError("merge", "'" + p.path + "' has a malformed specula:sample_split '" + split->second + "'");
+            if (!parseWholeList(split->second, '/', 2, 0, kMaxSplits, s) || s[1] < 2 || s[0] >= s[1])
+                throw InputError("merge", "'" + p.path + "' has specula:sample_split " + shown(split->second) +
+                                             ", not I/K with 0 ≤ I < K and 2 ≤ K ≤ " + std::to_string(kMaxSplits));
+            if (spp % s[1] != 0 || block != spp / s[1])
+                throw InputError("merge", "'" + p.path + "' has specula:sample_split " + shown(split->second) + " of specula:spp " +
+                                             std::to_string(spp) + " with specula:sample_block " + std::to_string(block) +
+                                             "; a split's block is spp / K");
             p.splitIndex = int(s[0]), p.splitCount = int(s[1]);
             if (!p.images.find("samples")) throw InputError("merge", "'" + p.path + "' is a sample split without its 'samples' layer");
+            checkSampleCounts(p, block);
         }
         std::vector<std::string> names, refNames;
         for (const AovBuffer& b : p.images.aovs)
@@ -144,8 +269,11 @@ MergeSummary mergePieces(const std::vector<std::string>& paths, const std::strin
             bySplit[size_t(p->splitIndex)] = p;
         }
         std::string missing;
+        int missingCount = 0;
         for (int i = 0; i < k; ++i)
-            if (!bySplit[size_t(i)]) missing += (missing.empty() ? "" : ", ") + std::to_string(i) + "/" + std::to_string(k);
+            if (!bySplit[size_t(i)] && ++missingCount <= 8)
+                missing += (missing.empty() ? "" : ", ") + std::to_string(i) + "/" + std::to_string(k);
+        if (missingCount > 8) missing += " and " + std::to_string(missingCount - 8) + " more";
         if (!missing.empty()) throw InputError("merge", "tile " + tileName(key) + " lacks sample splits " + missing + "; the set is incomplete");
         list = bySplit;
         sum.sampleSplits = std::max(sum.sampleSplits, k);
@@ -221,7 +349,22 @@ MergeSummary mergePieces(const std::vector<std::string>& paths, const std::strin
     }
     sum.pieces = int(pieces.size());
     sum.tiles = int(tiles.size());
-    writeExr(outPath, out, *ColorConfig::load("builtin"));
+    try {
+        writeExr(outPath, out, *ColorConfig::load("builtin"));
+    } catch (const ImageIoError& e) {
+        // A missing folder, a full disk, no permission: I/O (docs/cli.md, exit 3), not bad input.
+        throw IoError(std::string("merge: cannot write '") + outPath + "': " + e.what());
+    }
+    // Read back: the EXR writer does not see every failed write (a full disk or a file size limit left a truncated
+    // frame that it reported written), and a frame is what the farm exists to produce.
+    try {
+        const ImageSet back = readImageSet(outPath, maxPiecePixels);
+        if (back.width != sum.width || back.height != sum.height || back.aovs.size() != out.aovs.size())
+            throw ImageIoError("it reads back as another image");
+    } catch (const ImageIoError& e) {
+        fs::remove(outPath, ec);
+        throw IoError("merge: writing '" + outPath + "' failed (a full disk?): the written file does not read back: " + e.what());
+    }
     return sum;
 }
 
@@ -229,42 +372,108 @@ MergeSummary mergePieces(const std::vector<std::string>& paths, const std::strin
 
 namespace {
 
+// A plan holds one task per piece: at most the submit limit, each at most a few hundred bytes of JSON.
+constexpr long long kMaxTasks = 1000000;
+constexpr uintmax_t kMaxPlanBytes = uintmax_t(512) << 20;
+
 std::string shellQuote(const std::string& s) {
     std::string q = "'";
     for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
     return q + "'";
 }
 
-std::string readText(const std::string& path) {
-    std::ifstream f(path, std::ios::binary);
-    if (!f) throw IoError("cannot read '" + path + "'");
-    std::stringstream ss;
-    ss << f.rdbuf();
-    return ss.str();
+// How a command line reads in messages and dry runs: each word shell-quoted unless it is plain.
+std::string displayCommand(const std::vector<std::string>& argv) {
+    std::string line;
+    for (const std::string& a : argv) {
+        const bool plain = !a.empty() && std::all_of(a.begin(), a.end(), [](char c) {
+            return std::isalnum((unsigned char)c) || std::strchr("-_./=:,%@+", c);
+        });
+        line += (line.empty() ? "" : " ") + (plain ? a : shellQuote(a));
+    }
+    return line;
 }
 
-void writeText(const std::string& path, const std::string& text) {
-    const std::string tmp = path + ".tmp";
+// A file of the farm folder, read whole only if it is a regular file no larger than maxBytes (a plan or job list
+// replaced by /dev/zero or a FIFO would otherwise be read forever).
+std::string readBounded(const fs::path& path, uintmax_t maxBytes, const std::string& what) {
+    std::error_code ec;
+    const fs::file_status st = fs::status(path, ec);
+    if (ec || !fs::exists(st)) throw IoError("cannot read " + what + " '" + path.string() + "': no such file");
+    if (!fs::is_regular_file(st)) throw IoError(what + " '" + path.string() + "' is not a regular file (a folder, device or FIFO)");
+    const uintmax_t bytes = fs::file_size(path, ec);
+    if (ec) throw IoError("cannot read " + what + " '" + path.string() + "': " + ec.message());
+    if (bytes > maxBytes)
+        throw IoError(what + " '" + path.string() + "' holds " + std::to_string(bytes) + " bytes, more than the " +
+                      std::to_string(maxBytes >> 20) + " MiB it can");
+    std::ifstream f(path, std::ios::binary);
+    if (!f) throw IoError("cannot read " + what + " '" + path.string() + "'");
+    std::string text(size_t(bytes), '\0');
+    f.read(text.data(), std::streamsize(bytes));
+    text.resize(size_t(f.gcount()));
+    if (f.bad()) throw IoError("cannot read " + what + " '" + path.string() + "'");
+    return text;
+}
+
+// Writes a farm file atomically (temp file + rename); a full disk or a missing folder is an IoError (exit 3).
+void writeText(const fs::path& path, const std::string& text) {
+    const fs::path tmp = path.string() + ".tmp";
+    std::error_code ec;
     {
         std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
-        if (!f) throw IoError("cannot write '" + tmp + "'");
+        if (!f) throw IoError("cannot write '" + tmp.string() + "' (does its folder exist?)");
         f << text;
-        if (!f) throw IoError("cannot write '" + tmp + "'");
+        f.flush();  // a full disk shows at the flush or close, not at <<
+        f.close();
+        if (!f) {
+            fs::remove(tmp, ec);
+            throw IoError("cannot write '" + tmp.string() + "' (is the disk full?)");
+        }
     }
-    std::error_code ec;
     fs::rename(tmp, path, ec);
-    if (ec) throw IoError("cannot rename '" + tmp + "' to '" + path + "': " + ec.message());
+    if (ec) {
+        std::error_code ignored;
+        fs::remove(tmp, ignored);
+        throw IoError("cannot rename '" + tmp.string() + "' to '" + path.string() + "': " + ec.message());
+    }
 }
 
-// Runs a command line through the shell; returns its exit status and standard output.
-int runCommand(const std::string& cmd, std::string& out) {
+// Runs a program (looked up in PATH) with these arguments, without a shell: nothing in them is ever shell syntax.
+// Returns its exit status (-1 if it could not run) and its standard output and error.
+int runProgram(const std::vector<std::string>& argv, std::string& out) {
     out.clear();
-    FILE* p = popen((cmd + " 2>&1").c_str(), "r");
-    if (!p) return -1;
+    int fds[2];
+    if (pipe(fds) != 0) return -1;
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_adddup2(&actions, fds[1], 1);
+    posix_spawn_file_actions_adddup2(&actions, fds[1], 2);
+    posix_spawn_file_actions_addclose(&actions, fds[0]);
+    posix_spawn_file_actions_addclose(&actions, fds[1]);
+    std::vector<char*> args;
+    for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+    args.push_back(nullptr);
+    pid_t pid = 0;
+    const int spawned = posix_spawnp(&pid, args[0], &actions, nullptr, args.data(), environ);
+    posix_spawn_file_actions_destroy(&actions);
+    close(fds[1]);
+    if (spawned != 0) {
+        close(fds[0]);
+        out = argv[0] + ": " + std::strerror(spawned);
+        return -1;
+    }
     char buf[4096];
-    size_t n;
-    while ((n = fread(buf, 1, sizeof buf, p)) > 0) out.append(buf, n);
-    const int st = pclose(p);
+    for (ssize_t n; (n = read(fds[0], buf, sizeof buf)) != 0;) {
+        if (n < 0) {
+            if (errno == EINTR) continue;
+            break;
+        }
+        if (out.size() < (size_t(1) << 20)) out.append(buf, size_t(n));  // sbatch/squeue say little; keep a bound
+    }
+    close(fds[0]);
+    int st = 0;
+    while (waitpid(pid, &st, 0) < 0 && errno == EINTR) {
+    }
     return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
 }
 
@@ -280,68 +489,315 @@ std::string lastLine(const std::string& out) {
     return nl == std::string::npos ? t : t.substr(nl + 1);
 }
 
-Json loadPlan(const std::string& dir) {
-    const std::string path = (fs::path(dir) / "plan.json").string();
+// ---- the plan, checked -------------------------------------------------------------------------------------------
+
+struct PlanTask {
+    int frame = 0;
+    std::array<int, 4> crop{};
+    int splitIndex = 0, splitCount = 1;
+    std::string piece;  // relative to the farm folder, inside it
+};
+
+struct Plan {
+    Json document;       // as read, for rewriting "attempts"
+    fs::path dir;        // the farm folder as the user named it (absolute)
+    fs::path planPath;
+    std::string name, scene, specula;
+    int frameFirst = 0, frameLast = 0, tilesX = 1, tilesY = 1, spp = 1, sppSplit = 1, retries = 0, threadsPerTask = 1;
+    int attempts = 0, width = 1, height = 1;
+    std::vector<PlanTask> tasks;
+    std::vector<std::string> renderArgs;
+};
+
+// Typed reads of plan.json; every error names the plan file and the JSON pointer of the value.
+struct PlanReader {
+    std::string file;
+
+    [[noreturn]] void fail(const std::string& pointer, const std::string& message) const {
+        throw InputError(pointer, "in the farm plan '" + file + "': " + message);
+    }
+    const Json& at(const Json& parent, const std::string& key, const std::string& pointer) const {
+        if (!parent.is_object()) fail(pointer, "expected an object, got " + jsonTypeName(parent));
+        auto it = parent.find(key);
+        if (it == parent.end()) fail(pointer + "/" + key, "missing (the plan was not written by `specula farm submit`)");
+        return *it;
+    }
+    long long integer(const Json& v, const std::string& pointer, long long lo, long long hi) const {
+        long long x = 0;
+        if (v.is_number_integer() || v.is_number_unsigned()) {
+            if (v.is_number_unsigned() && v.get<unsigned long long>() > (unsigned long long)hi) x = hi + 1;
+            else x = v.get<long long>();
+            if (x >= lo && x <= hi) return x;
+        }
+        fail(pointer, "expected an integer in " + std::to_string(lo) + " … " + std::to_string(hi) + ", got " +
+                          (v.is_number() || v.is_boolean() ? v.dump() : jsonTypeName(v)));
+    }
+    long long integerAt(const Json& parent, const std::string& key, const std::string& pointer, long long lo, long long hi) const {
+        return integer(at(parent, key, pointer), pointer + "/" + key, lo, hi);
+    }
+    const Json& array(const Json& v, const std::string& pointer, size_t minSize, size_t maxSize) const {
+        if (!v.is_array()) fail(pointer, "expected an array, got " + jsonTypeName(v));
+        if (v.size() < minSize || v.size() > maxSize)
+            fail(pointer, "expected " + (minSize == maxSize ? std::to_string(minSize) : std::to_string(minSize) + " … " + std::to_string(maxSize)) +
+                              " items, got " + std::to_string(v.size()));
+        return v;
+    }
+    std::string string(const Json& v, const std::string& pointer) const {
+        if (!v.is_string()) fail(pointer, "expected a string, got " + jsonTypeName(v));
+        const std::string s = v.get<std::string>();
+        if (s.empty() || s.size() > 4096) fail(pointer, "expected a string of 1 … 4096 characters, got " + std::to_string(s.size()));
+        if (hasControlCharacter(s)) fail(pointer, shown(s) + " holds a control character (a newline, tab or NUL)");
+        return s;
+    }
+    std::string absolutePath(const Json& parent, const std::string& key, const std::string& pointer) const {
+        const std::string s = string(at(parent, key, pointer), pointer + "/" + key);
+        if (s[0] != '/') fail(pointer + "/" + key, shown(s) + " is not an absolute path");
+        return s;
+    }
+};
+
+bool isInside(const fs::path& root, const fs::path& p) {
+    auto r = root.begin(), q = p.begin();
+    for (; r != root.end(); ++r, ++q)
+        if (q == p.end() || *r != *q) return false;
+    return true;
+}
+
+// A path inside the farm folder that a plan names (a piece): relative, without '.' or '..' components, and not leading
+// out of the folder through a symlink (its folder, resolved, is inside the resolved farm folder, and the file itself
+// is not a symlink). 'folders' caches resolved parent folders (all pieces share pieces/).
+void checkInsideFarm(const PlanReader& r, const std::string& pointer, const std::string& rel, const fs::path& root,
+                     const fs::path& canonicalRoot, std::map<fs::path, bool>& folders) {
+    const fs::path p(rel);
+    if (p.is_absolute()) r.fail(pointer, shown(rel) + " is an absolute path; plan paths are relative to the farm folder");
+    for (const fs::path& part : p)
+        if (part == ".." || part == "." || part.empty())
+            r.fail(pointer, shown(rel) + " has a '" + part.string() + "' component; plan paths stay inside the farm folder");
+    const fs::path full = root / p;
+    const fs::path parent = full.parent_path();
+    auto it = folders.find(parent);
+    if (it == folders.end()) {
+        std::error_code ec;
+        const fs::path resolved = fs::weakly_canonical(parent, ec);
+        it = folders.emplace(parent, !ec && isInside(canonicalRoot, resolved)).first;
+    }
+    if (!it->second) r.fail(pointer, shown(rel) + " is in a folder that leads out of the farm folder (a symlink?)");
     std::error_code ec;
-    if (!fs::exists(path, ec)) throw IoError("'" + dir + "' is not a farm folder (no plan.json; see specula farm submit)");
+    if (fs::is_symlink(fs::symlink_status(full, ec)))
+        r.fail(pointer, shown(rel) + " is a symlink; pieces and frames are plain files inside the farm folder");
+}
+
+// Reads farmDir/plan.json and checks all of it (checkPlan in farm.h).
+Plan loadPlan(const std::string& farmDir) {
+    Plan plan;
+    std::error_code ec;
+    plan.dir = fs::absolute(farmDir, ec).lexically_normal();
+    if (plan.dir.has_filename() == false && plan.dir.has_parent_path()) plan.dir = plan.dir.parent_path();
+    plan.planPath = plan.dir / "plan.json";
+    if (!fs::exists(plan.planPath, ec))
+        throw IoError("'" + farmDir + "' is not a farm folder (no plan.json; see specula farm submit)");
+    const PlanReader r{plan.planPath.string()};
     try {
-        return Json::parse(readText(path));
+        plan.document = parseStrictJson(readBounded(plan.planPath, kMaxPlanBytes, "the farm plan"), plan.planPath.string());
     } catch (const Json::exception& e) {
-        throw InputError("farm submit", "'" + path + "' is not a farm plan: " + std::string(e.what()));
+        throw InputError("/", "'" + plan.planPath.string() + "' is not a farm plan: " + e.what());
     }
+    const Json& d = plan.document;
+    if (!d.is_object()) r.fail("/", "expected an object, got " + jsonTypeName(d));
+    r.integerAt(d, "version", "", 1, 1);
+    plan.name = r.string(r.at(d, "name", ""), "/name");
+    if (plan.name.find('/') != std::string::npos || plan.name == "." || plan.name == "..")
+        r.fail("/name", shown(plan.name) + " is not a file name (the frames are frames/<name>_FFFF.exr)");
+    plan.scene = r.absolutePath(d, "scene", "");
+    plan.specula = r.absolutePath(d, "specula", "");
+    const std::string written = r.absolutePath(d, "dir", "");
+    const Json& frames = r.array(r.at(d, "frames", ""), "/frames", 2, 2);
+    plan.frameFirst = int(r.integer(frames[0], "/frames/0", kIntMin, kIntMax));
+    plan.frameLast = int(r.integer(frames[1], "/frames/1", plan.frameFirst, std::min<long long>(kIntMax, plan.frameFirst + 99999LL)));
+    const Json& size = r.array(r.at(d, "size", ""), "/size", 2, 2);
+    plan.width = int(r.integer(size[0], "/size/0", 1, kMaxSide));
+    plan.height = int(r.integer(size[1], "/size/1", 1, kMaxSide));
+    const Json& tiles = r.array(r.at(d, "tiles", ""), "/tiles", 2, 2);
+    plan.tilesX = int(r.integer(tiles[0], "/tiles/0", 1, plan.width));
+    plan.tilesY = int(r.integer(tiles[1], "/tiles/1", 1, plan.height));
+    plan.spp = int(r.integerAt(d, "spp", "", 1, kMaxSpp));
+    plan.sppSplit = int(r.integerAt(d, "spp_split", "", 1, 4096));
+    if (plan.spp % plan.sppSplit != 0)
+        r.fail("/spp_split", std::to_string(plan.sppSplit) + " does not divide spp " + std::to_string(plan.spp));
+    plan.retries = int(r.integerAt(d, "retries", "", 0, 100));
+    plan.threadsPerTask = int(r.integerAt(d, "threads_per_task", "", 1, 1024));
+    plan.attempts = int(r.integerAt(d, "attempts", "", 0, plan.retries));
+    const Json& args = r.array(r.at(d, "render_args", ""), "/render_args", 0, 256);
+    for (size_t i = 0; i < args.size(); ++i) {
+        const std::string pointer = "/render_args/" + std::to_string(i);
+        if (!args[i].is_string()) r.fail(pointer, "expected a string, got " + jsonTypeName(args[i]));
+        const std::string a = args[i].get<std::string>();
+        if (a.size() > 4096 || a.find('\0') != std::string::npos) r.fail(pointer, "expected a string of at most 4096 characters without NUL");
+        plan.renderArgs.push_back(a);
+    }
+
+    std::error_code rootEc;
+    const fs::path canonicalRoot = fs::canonical(plan.dir, rootEc);
+    if (rootEc) throw IoError("cannot resolve the farm folder '" + plan.dir.string() + "': " + rootEc.message());
+    std::map<fs::path, bool> folders;
+    // frames/<name>_FFFF.exr: the frames folder must be inside the farm too.
+    checkInsideFarm(r, "/name", "frames/" + plan.name + "_0000.exr", plan.dir, canonicalRoot, folders);
+    const Json& tasks = r.array(r.at(d, "tasks", ""), "/tasks", 1, size_t(kMaxTasks));
+    std::set<std::string> pieces;
+    plan.tasks.reserve(tasks.size());
+    for (size_t i = 0; i < tasks.size(); ++i) {
+        const std::string p = "/tasks/" + std::to_string(i);
+        const Json& t = tasks[i];
+        PlanTask task;
+        task.frame = int(r.integerAt(t, "frame", p, plan.frameFirst, plan.frameLast));
+        const Json& crop = r.array(r.at(t, "crop", p), p + "/crop", 4, 4);
+        for (int k = 0; k < 4; ++k)
+            task.crop[size_t(k)] = int(r.integer(crop[size_t(k)], p + "/crop/" + std::to_string(k), 0, k % 2 ? plan.height : plan.width));
+        if (task.crop[0] >= task.crop[2] || task.crop[1] >= task.crop[3])
+            r.fail(p + "/crop", "expected x0 < x1 and y0 < y1, got " + t.at("crop").dump());
+        const Json& split = r.array(r.at(t, "split", p), p + "/split", 2, 2);
+        task.splitCount = int(r.integer(split[1], p + "/split/1", plan.sppSplit, plan.sppSplit));
+        task.splitIndex = int(r.integer(split[0], p + "/split/0", 0, task.splitCount - 1));
+        task.piece = r.string(r.at(t, "piece", p), p + "/piece");
+        if (fs::path(task.piece).extension() != ".exr") r.fail(p + "/piece", shown(task.piece) + " does not end in .exr");
+        checkInsideFarm(r, p + "/piece", task.piece, plan.dir, canonicalRoot, folders);
+        if (!pieces.insert(fs::path(task.piece).lexically_normal().string()).second)
+            r.fail(p + "/piece", shown(task.piece) + " is the piece of an earlier task too");
+        plan.tasks.push_back(std::move(task));
+    }
+    // Every frame of the range has a task: otherwise `farm finish` would call a farm complete without that frame.
+    std::vector<bool> framesWithTasks(size_t(plan.frameLast - plan.frameFirst) + 1, false);
+    for (const PlanTask& t : plan.tasks) framesWithTasks[size_t(t.frame - plan.frameFirst)] = true;
+    for (size_t f = 0; f < framesWithTasks.size(); ++f)
+        if (!framesWithTasks[f]) r.fail("/tasks", "frame " + std::to_string(plan.frameFirst + long(f)) + " of /frames has no task");
+    // The folder the plan was written for must be this one: the scripts name it, so a plan copied or moved elsewhere
+    // would have its tasks write into the old folder. Every path above was checked against the folder the user named.
+    if (!fs::equivalent(written, plan.dir, ec))
+        r.fail("/dir", "the plan was written for the farm folder " + shown(written) + ", not '" + plan.dir.string() +
+                           "' (its scripts name that folder; submit the farm again here)");
+    return plan;
 }
 
-std::string pieceFile(const Json& plan, const Json& task) {
-    return (fs::path(plan.at("dir").get<std::string>()) / task.at("piece").get<std::string>()).string();
-}
+fs::path pieceFile(const Plan& plan, const PlanTask& task) { return plan.dir / task.piece; }
 
-std::string frameFile(const Json& plan, int frame) {
-    char name[64];
+fs::path frameFile(const Plan& plan, int frame) {
+    char name[32];
     std::snprintf(name, sizeof name, "_%04d.exr", frame);
-    return (fs::path(plan.at("dir").get<std::string>()) / "frames" / (plan.at("name").get<std::string>() + name)).string();
+    return plan.dir / "frames" / (plan.name + name);
 }
 
-// sbatch for the given task indices, then the finish job after them; returns the job ids and records them.
-std::vector<std::string> submitJobs(const Json& plan, const std::vector<int>& tasks, std::vector<std::string>& commands,
-                                    bool dryRun) {
-    const fs::path dir = plan.at("dir").get<std::string>();
-    std::string array;
-    for (size_t i = 0; i < tasks.size(); ++i) array += (i ? "," : "") + std::to_string(tasks[i]);
-    const std::string renderCmd = "sbatch --parsable --array=" + array + " " + shellQuote((dir / "render.sbatch").string());
-    commands.push_back(renderCmd);
-    if (dryRun) {
-        commands.push_back("sbatch --parsable --dependency=afterany:<render job> " + shellQuote((dir / "finish.sbatch").string()));
-        return {};
+// ---- Slurm ---------------------------------------------------------------------------------------------------------
+
+// A Slurm name list (partition, account): names of [A-Za-z0-9._-], separated by commas when 'list'.
+void checkSlurmNames(const std::string& option, const std::string& value, bool list) {
+    bool ok = !value.empty() && value.size() <= 256;
+    bool lastWasComma = true;
+    for (char c : value) {
+        const bool comma = c == ',';
+        if (comma ? (!list || lastWasComma) : !(std::isalnum((unsigned char)c) || c == '.' || c == '_' || c == '-')) ok = false;
+        lastWasComma = comma;
     }
+    if (lastWasComma) ok = false;
+    if (!ok)
+        throw InputError(option, shown(value) + " is not a Slurm " + option.substr(2) + " name: use 1 … 256 letters, digits, '.', '_' and '-'" +
+                                     (list ? " (several names separated by commas)" : ""));
+}
+
+// The array indices as Slurm's --array list with ranges ("0-7,9,12-13"): 1e6 single indices would pass the limit of
+// one argument's length.
+std::string arraySpec(const std::vector<int>& tasks) {
+    std::string spec;
+    for (size_t i = 0; i < tasks.size();) {
+        size_t j = i;
+        while (j + 1 < tasks.size() && tasks[j + 1] == tasks[j] + 1) ++j;
+        spec += (spec.empty() ? "" : ",") + std::to_string(tasks[i]) + (j > i ? "-" + std::to_string(tasks[j]) : "");
+        i = j + 1;
+    }
+    return spec;
+}
+
+// The job id sbatch --parsable printed ("123" or "123;cluster"): digits only, or the submission is treated as failed.
+std::string parsedJobId(const std::string& out) {
+    const std::string line = lastLine(out);
+    const std::string id = line.substr(0, line.find(';'));
+    if (id.empty() || id.size() > 20 || !std::all_of(id.begin(), id.end(), [](char c) { return std::isdigit((unsigned char)c); }))
+        return "";
+    return id;
+}
+
+std::vector<std::string> sbatchArgv(const fs::path& dir, const std::string& dependency, const std::string& array, const std::string& script) {
+    // --chdir: the scripts' log paths are relative to it, so no path sits in an #SBATCH line (sbatch splits those
+    // lines at spaces and quotes, and reads '#' as a comment), while this argv reaches sbatch word for word.
+    std::vector<std::string> argv = {"sbatch", "--parsable", "--chdir=" + dir.string()};
+    if (!dependency.empty()) argv.push_back("--dependency=afterany:" + dependency);
+    if (!array.empty()) argv.push_back("--array=" + array);
+    argv.push_back((dir / script).string());
+    return argv;
+}
+
+// Queues the task array for these indices; returns its job id. Throws IoError (nothing queued) when sbatch refuses.
+std::string submitArray(const fs::path& dir, const std::vector<int>& tasks, std::vector<std::string>& commands) {
+    const std::vector<std::string> argv = sbatchArgv(dir, "", arraySpec(tasks), "render.sbatch");
+    commands.push_back(displayCommand(argv));
     std::string out;
-    if (runCommand(renderCmd, out) != 0) throw IoError("sbatch failed: " + lastLine(out));
-    const std::string renderJob = trim(out).substr(0, trim(out).find(';'));
-    const std::string finishCmd =
-        "sbatch --parsable --dependency=afterany:" + renderJob + " " + shellQuote((dir / "finish.sbatch").string());
-    commands.push_back(finishCmd);
-    if (runCommand(finishCmd, out) != 0) {
-        std::ofstream jobs(dir / "jobs.txt", std::ios::app);
-        jobs << renderJob << " render " << array << "\n";
-        throw IoError("sbatch (finish job) failed: " + lastLine(out) + "; the render job " + renderJob +
-                      " is queued: run `specula farm finish " + dir.string() + "` when it ends");
-    }
-    const std::string finishJob = trim(out).substr(0, trim(out).find(';'));
+    const int rc = runProgram(argv, out);
+    const std::string id = rc == 0 ? parsedJobId(out) : "";
+    if (id.empty()) throw IoError("sbatch failed: " + shown(lastLine(out)) + (rc == 0 ? " (no job id)" : ""));
+    return id;
+}
+
+// Queues the finish job after the array job; records both in jobs.txt. When sbatch refuses the finish job, the array
+// is queued: the error says how to finish by hand.
+std::string submitFinish(const fs::path& dir, const std::string& renderJob, const std::vector<int>& tasks,
+                         std::vector<std::string>& commands) {
+    const std::vector<std::string> argv = sbatchArgv(dir, renderJob, "", "finish.sbatch");
+    commands.push_back(displayCommand(argv));
+    std::string out;
+    const int rc = runProgram(argv, out);
+    const std::string finishJob = rc == 0 ? parsedJobId(out) : "";
     std::ofstream jobs(dir / "jobs.txt", std::ios::app);
-    jobs << renderJob << " render " << array << "\n" << finishJob << " finish\n";
-    return {renderJob, finishJob};
+    jobs << renderJob << " render " << arraySpec(tasks) << "\n";
+    if (finishJob.empty())
+        throw IoError("sbatch (finish job) failed: " + shown(lastLine(out)) + "; the render job " + renderJob +
+                      " is queued: run `specula farm finish " + shellQuote(dir.string()) + "` when it ends");
+    jobs << finishJob << " finish\n";
+    return finishJob;
 }
 
 }  // namespace
 
+std::string slurmJobName(const std::string& sceneStem) {
+    std::string name = "specula-";
+    for (char c : sceneStem) {
+        if (name.size() >= 64) break;
+        name += std::isalnum((unsigned char)c) || c == '.' || c == '_' || c == '-' ? c : '_';
+    }
+    return name;
+}
+
+int checkPlan(const std::string& farmDir) { return int(loadPlan(farmDir).tasks.size()); }
+
 SubmitResult submit(const SubmitOptions& o) {
     SubmitResult r;
     std::error_code ec;
+    // Every value that reaches a script, checked before anything is read or written (issue 35).
+    if (!o.partition.empty()) checkSlurmNames("--partition", o.partition, true);
+    if (!o.account.empty()) checkSlurmNames("--account", o.account, false);
+    if (o.executable.empty() || o.executable[0] != '/' || hasControlCharacter(o.executable))
+        throw InputError("farm submit", "the specula executable " + shown(o.executable) +
+                                            " must be an absolute path without control characters (the tasks run it on every node)");
+    for (size_t i = 0; i < o.extraRenderArgs.size(); ++i)
+        if (o.extraRenderArgs[i].find('\0') != std::string::npos || o.extraRenderArgs[i].size() > 4096)
+            throw InputError("farm submit", "render argument " + std::to_string(i) + " holds a NUL or is longer than 4096 characters");
+    if (o.extraRenderArgs.size() > 256) throw InputError("farm submit", "more than 256 render arguments");
     const std::string scene = fs::absolute(o.scene, ec).lexically_normal().string();
+    if (hasControlCharacter(scene))
+        throw InputError("farm submit", "the scene path " + shown(scene) + " holds a control character (a newline or tab); rename the file");
     SceneOverrides ov;
     ov.spp = o.spp;
     Json doc;
     try {
-        doc = Json::parse(readText(scene));
+        doc = Json::parse(readJsonText(scene));  // at most 256 MiB (a scene named /dev/zero is refused, not read forever)
     } catch (const Json::exception&) {
         doc = Json::object();  // the loader below reports it properly
     }
@@ -349,7 +805,7 @@ SubmitResult submit(const SubmitOptions& o) {
     const int first = o.frameFirst.value_or(range.present ? range.frameStart : 0);
     const int last = o.frameLast.value_or(range.present ? range.frameEnd : first);
     if (last < first) throw InputError("farm submit", "--frames " + std::to_string(first) + "-" + std::to_string(last) + " is an empty range");
-    if (last - first >= 100000) throw InputError("farm submit", "--frames spans more than 100000 frames");
+    if ((long long)last - first >= 100000) throw InputError("farm submit", "--frames spans more than 100000 frames");
     ov.frame = first;
     const Scene s = loadScene(scene, ov);  // validates the scene (and the first frame) before anything is written
     if (range.present) ov.frame = last, (void)loadScene(scene, ov);
@@ -364,10 +820,19 @@ SubmitResult submit(const SubmitOptions& o) {
                                                      " differs from --spp-split's block of " + std::to_string(spp / o.sppSplit));
     const std::string name = fs::path(scene).stem().string();
     const fs::path dir = fs::absolute(o.farmDir.empty() ? "farm-" + name : o.farmDir, ec).lexically_normal();
+    if (hasControlCharacter(dir.string()))
+        throw InputError("--dir", "the farm folder " + shown(dir.string()) +
+                                      " holds a control character (a newline or tab); Slurm scripts and logs name it");
+    // Slurm expands %-patterns (%j, %A, ...) in the log path, its working-folder prefix included, and a backslash
+    // turns the patterns off: a farm folder with either would put the logs elsewhere (the farm test saw "100%j" become
+    // "1003").
+    if (dir.string().find_first_of("%\\") != std::string::npos)
+        throw InputError("--dir", "the farm folder " + shown(dir.string()) +
+                                      " holds '%' or '\\', which Slurm reads as file-name patterns in the task logs' path; choose another folder");
     if (fs::exists(dir / "plan.json", ec))
         throw IoError("'" + dir.string() + "' already holds a farm plan; use another --dir (or specula farm status)");
     const long long taskCount = (long long)(last - first + 1) * o.tilesX * o.tilesY * o.sppSplit;
-    if (taskCount > 1000000) throw InputError("farm submit", "the farm would have " + std::to_string(taskCount) + " tasks (limit 1000000)");
+    if (taskCount > kMaxTasks) throw InputError("farm submit", "the farm would have " + std::to_string(taskCount) + " tasks (limit 1000000)");
 
     Json plan;
     plan["version"] = 1;
@@ -384,7 +849,6 @@ SubmitResult submit(const SubmitOptions& o) {
     plan["attempts"] = 0;
     plan["size"] = {W, H};
     Json tasks = Json::array();
-    std::string lines;
     for (int f = first; f <= last; ++f)
         for (int ty = 0; ty < o.tilesY; ++ty)
             for (int tx = 0; tx < o.tilesX; ++tx)
@@ -408,70 +872,72 @@ SubmitResult submit(const SubmitOptions& o) {
     r.frames = last - first + 1;
 
     // Scripts: the array task runs `specula farm task DIR INDEX`, which execs the piece's render (or does nothing when
-    // the piece exists, so a resubmission renders only what is missing).
+    // the piece exists, so a resubmission renders only what is missing). What the #SBATCH lines hold is checked above
+    // (names) or generated here (numbers, the fixed relative log paths); the exec line's words are shell-quoted.
     const std::string exe = shellQuote(o.executable), d = shellQuote(dir.string());
-    std::string common = "#!/bin/bash\n#SBATCH --job-name=specula-" + name + "\n";
+    std::string common = "#!/bin/bash\n#SBATCH --job-name=" + slurmJobName(name) + "\n";
     if (!o.partition.empty()) common += "#SBATCH --partition=" + o.partition + "\n";
+    if (!o.account.empty()) common += "#SBATCH --account=" + o.account + "\n";
     const std::string renderScript = common + "#SBATCH --cpus-per-task=" + std::to_string(o.threadsPerTask) +
-                                     "\n#SBATCH --requeue\n#SBATCH --output=" + (dir / "logs" / "task_%A_%a.log").string() +
+                                     "\n#SBATCH --requeue\n#SBATCH --output=logs/task_%A_%a.log"
                                      "\n# One piece of the render per array task (docs/farm.md).\nexec " + exe + " farm task " + d +
                                      " \"$SLURM_ARRAY_TASK_ID\"\n";
-    const std::string finishScript = common + "#SBATCH --cpus-per-task=1\n#SBATCH --output=" + (dir / "logs" / "finish_%j.log").string() +
+    const std::string finishScript = common + "#SBATCH --cpus-per-task=1\n#SBATCH --output=logs/finish_%j.log"
                                      "\n# Merge finished frames; resubmit missing pieces while retries are left.\nexec " + exe +
                                      " farm finish " + d + "\n";
-    fs::create_directories(dir / "pieces", ec);
-    fs::create_directories(dir / "logs", ec);
-    fs::create_directories(dir / "frames", ec);
-    if (ec) throw IoError("cannot create the farm folder '" + dir.string() + "': " + ec.message());
-    writeText((dir / "render.sbatch").string(), renderScript);
-    writeText((dir / "finish.sbatch").string(), finishScript);
+    for (const char* sub : {"pieces", "logs", "frames"}) {
+        fs::create_directories(dir / sub, ec);
+        if (ec) throw IoError("cannot create the farm folder '" + (dir / sub).string() + "': " + ec.message());
+    }
+    writeText(dir / "render.sbatch", renderScript);
+    writeText(dir / "finish.sbatch", finishScript);
     fs::permissions(dir / "render.sbatch", fs::perms::owner_exec, fs::perm_options::add, ec);
     fs::permissions(dir / "finish.sbatch", fs::perms::owner_exec, fs::perm_options::add, ec);
     std::vector<int> all(size_t(r.tasks));
     for (int i = 0; i < r.tasks; ++i) all[size_t(i)] = i;
     if (o.dryRun) {
-        submitJobs(plan, all, r.commands, true);
+        r.commands.push_back(displayCommand(sbatchArgv(dir, "", arraySpec(all), "render.sbatch")));
+        r.commands.push_back(displayCommand(sbatchArgv(dir, "<render job>", "", "finish.sbatch")));
         plan["dry_run"] = true;
-        writeText((dir / "plan.json").string(), plan.dump(1));
+        writeText(dir / "plan.json", plan.dump(1));
         return r;
     }
-    writeText((dir / "plan.json").string(), plan.dump(1));
+    // The plan is written before the array is queued: a task may start at once and reads it.
+    writeText(dir / "plan.json", plan.dump(1));
+    std::string renderJob;
     try {
-        r.jobIds = submitJobs(plan, all, r.commands, false);
+        renderJob = submitArray(dir, all, r.commands);
     } catch (const IoError&) {
         // Nothing was queued when the array itself was refused: take the plan back, so that the same command can be
         // run again (a plan left behind would make the folder look like a running farm).
-        std::ifstream jobs(dir / "jobs.txt");
-        if (!jobs) fs::remove(dir / "plan.json", ec);
+        fs::remove(dir / "plan.json", ec);
         throw;
     }
+    r.jobIds = {renderJob, submitFinish(dir, renderJob, all, r.commands)};
     return r;
 }
 
 std::vector<std::string> taskCommand(const std::string& farmDir, int taskIndex) {
-    const Json plan = loadPlan(farmDir);
-    const Json& tasks = plan.at("tasks");
-    if (taskIndex < 0 || size_t(taskIndex) >= tasks.size())
-        throw InputError("farm task", "task " + std::to_string(taskIndex) + " is not in the plan (0-" + std::to_string(tasks.size() - 1) + ")");
-    const Json& t = tasks.at(size_t(taskIndex));
-    const std::string piece = pieceFile(plan, t);
+    const Plan plan = loadPlan(farmDir);
+    if (taskIndex < 0 || size_t(taskIndex) >= plan.tasks.size())
+        throw InputError("farm task", "task " + std::to_string(taskIndex) + " is not in the plan (0-" + std::to_string(plan.tasks.size() - 1) + ")");
+    const PlanTask& t = plan.tasks[size_t(taskIndex)];
+    const std::string piece = pieceFile(plan, t).string();
     std::error_code ec;
     if (fs::exists(piece, ec)) return {};
-    std::vector<std::string> argv = {plan.at("specula").get<std::string>(), "render", plan.at("scene").get<std::string>(),
-                                     "--frame", std::to_string(t.at("frame").get<int>())};
-    const Json& c = t.at("crop");
-    argv.push_back("--crop");
-    argv.push_back(std::to_string(c[0].get<int>()) + "," + std::to_string(c[1].get<int>()) + "," + std::to_string(c[2].get<int>()) +
-                   "," + std::to_string(c[3].get<int>()));
-    if (plan.at("spp_split").get<int>() > 1) {
+    // An argv, never a shell line: render_args reach `specula render` word for word.
+    std::vector<std::string> argv = {plan.specula, "render", plan.scene, "--frame", std::to_string(t.frame), "--crop",
+                                     std::to_string(t.crop[0]) + "," + std::to_string(t.crop[1]) + "," + std::to_string(t.crop[2]) +
+                                         "," + std::to_string(t.crop[3])};
+    if (plan.sppSplit > 1) {
         argv.push_back("--sample-split");
-        argv.push_back(std::to_string(t.at("split")[0].get<int>()) + "/" + std::to_string(t.at("split")[1].get<int>()));
+        argv.push_back(std::to_string(t.splitIndex) + "/" + std::to_string(t.splitCount));
     }
     argv.push_back("--spp");
-    argv.push_back(std::to_string(plan.at("spp").get<int>()));
+    argv.push_back(std::to_string(plan.spp));
     argv.push_back("--threads");  // the CPUs Slurm gave the task (--cpus-per-task)
-    argv.push_back(std::to_string(plan.value("threads_per_task", 1)));
-    for (const Json& a : plan.at("render_args")) argv.push_back(a.get<std::string>());
+    argv.push_back(std::to_string(plan.threadsPerTask));
+    for (const std::string& a : plan.renderArgs) argv.push_back(a);
     argv.push_back("--progress");
     argv.push_back("json");
     argv.push_back("-o");
@@ -480,24 +946,23 @@ std::vector<std::string> taskCommand(const std::string& farmDir, int taskIndex) 
 }
 
 std::string finish(const std::string& farmDir) {
-    Json plan = loadPlan(farmDir);
+    Plan plan = loadPlan(farmDir);
     std::error_code ec;
     std::map<int, std::vector<std::string>> byFrame;
     std::vector<int> missing;
-    const Json& tasks = plan.at("tasks");
-    for (size_t i = 0; i < tasks.size(); ++i) {
-        const std::string piece = pieceFile(plan, tasks[i]);
+    for (size_t i = 0; i < plan.tasks.size(); ++i) {
+        const std::string piece = pieceFile(plan, plan.tasks[i]).string();
         if (fs::exists(piece, ec))
-            byFrame[tasks[i].at("frame").get<int>()].push_back(piece);
+            byFrame[plan.tasks[i].frame].push_back(piece);
         else
             missing.push_back(int(i));
     }
     std::set<int> incomplete;
-    for (int i : missing) incomplete.insert(tasks[size_t(i)].at("frame").get<int>());
+    for (int i : missing) incomplete.insert(plan.tasks[size_t(i)].frame);
     int merged = 0, kept = 0;
-    for (int f = plan.at("frames")[0].get<int>(); f <= plan.at("frames")[1].get<int>(); ++f) {
+    for (int f = plan.frameFirst; f <= plan.frameLast; ++f) {
         if (incomplete.count(f)) continue;
-        const std::string out = frameFile(plan, f);
+        const std::string out = frameFile(plan, f).string();
         if (fs::exists(out, ec)) {
             ++kept;  // a finished frame is never overwritten
             continue;
@@ -507,59 +972,72 @@ std::string finish(const std::string& farmDir) {
     }
     std::string report = "merged " + std::to_string(merged) + " frame(s), " + std::to_string(kept) + " already written";
     if (missing.empty()) return report + "; the farm is complete";
-    const int attempts = plan.at("attempts").get<int>();
     std::string list;
-    for (size_t i = 0; i < missing.size() && i < 20; ++i) list += (i ? ", " : "") + tasks[size_t(missing[i])].at("piece").get<std::string>();
+    for (size_t i = 0; i < missing.size() && i < 20; ++i) list += (i ? ", " : "") + plan.tasks[size_t(missing[i])].piece;
     if (missing.size() > 20) list += ", ...";
-    if (attempts >= plan.at("retries").get<int>())
-        throw IoError(report + "; " + std::to_string(missing.size()) + " piece(s) still missing after " + std::to_string(attempts) +
-                      " resubmission(s): " + list + " (see the task logs in " + (fs::path(farmDir) / "logs").string() + ")");
-    plan["attempts"] = attempts + 1;
-    writeText((fs::path(plan.at("dir").get<std::string>()) / "plan.json").string(), plan.dump(1));
+    if (plan.attempts >= plan.retries)
+        throw IoError(report + "; " + std::to_string(missing.size()) + " piece(s) still missing after " + std::to_string(plan.attempts) +
+                      " resubmission(s): " + list + " (see the task logs in " + (plan.dir / "logs").string() + ")");
+    // The attempt counts once sbatch has queued it: a refused sbatch (the controller down, a full queue) throws here
+    // with "attempts" as it was, so running `farm finish` again retries with the same budget.
     std::vector<std::string> commands;
-    std::vector<std::string> ids = submitJobs(plan, missing, commands, false);
-    return report + "; resubmitted " + std::to_string(missing.size()) + " missing piece(s) (" + list + ") as job " + ids[0] +
-           ", attempt " + std::to_string(attempts + 1) + " of " + std::to_string(plan.at("retries").get<int>());
+    const std::string renderJob = submitArray(plan.dir, missing, commands);
+    plan.document["attempts"] = plan.attempts + 1;
+    writeText(plan.planPath, plan.document.dump(1));
+    const std::string finishJob = submitFinish(plan.dir, renderJob, missing, commands);
+    (void)finishJob;
+    return report + "; resubmitted " + std::to_string(missing.size()) + " missing piece(s) (" + list + ") as job " + renderJob +
+           ", attempt " + std::to_string(plan.attempts + 1) + " of " + std::to_string(plan.retries);
 }
 
 std::string status(const std::string& farmDir) {
-    const Json plan = loadPlan(farmDir);
+    const Plan plan = loadPlan(farmDir);
     std::error_code ec;
-    const Json& tasks = plan.at("tasks");
     int done = 0;
-    for (const Json& t : tasks) done += fs::exists(pieceFile(plan, t), ec) ? 1 : 0;
+    for (const PlanTask& t : plan.tasks) done += fs::exists(pieceFile(plan, t), ec) ? 1 : 0;
     int frames = 0, written = 0;
-    for (int f = plan.at("frames")[0].get<int>(); f <= plan.at("frames")[1].get<int>(); ++f, ++frames)
-        written += fs::exists(frameFile(plan, f), ec) ? 1 : 0;
+    for (int f = plan.frameFirst; f <= plan.frameLast; ++f, ++frames) written += fs::exists(frameFile(plan, f), ec) ? 1 : 0;
     std::ostringstream s;
-    s << "farm " << plan.at("dir").get<std::string>() << ": " << done << "/" << tasks.size() << " pieces, " << written << "/"
-      << frames << " frames written, " << plan.at("attempts").get<int>() << " resubmission(s)\n";
+    s << "farm " << plan.dir.string() << ": " << done << "/" << plan.tasks.size() << " pieces, " << written << "/" << frames
+      << " frames written, " << plan.attempts << " resubmission(s)\n";
+    // jobs.txt is the farm's own record, but it is read as untrusted text: job ids are digits, anything else is skipped.
     std::vector<std::string> ids;
-    {
-        std::ifstream jobs(fs::path(plan.at("dir").get<std::string>()) / "jobs.txt");
+    if (fs::exists(plan.dir / "jobs.txt", ec)) {
+        std::istringstream jobs(readBounded(plan.dir / "jobs.txt", uintmax_t(16) << 20, "the job list"));
         std::string line;
-        while (std::getline(jobs, line))
-            if (!line.empty()) ids.push_back(line.substr(0, line.find(' ')));
+        while (std::getline(jobs, line)) {
+            const std::string id = line.substr(0, line.find(' '));
+            if (!id.empty() && id.size() <= 20 && std::all_of(id.begin(), id.end(), [](char c) { return std::isdigit((unsigned char)c); }))
+                ids.push_back(id);
+        }
     }
     if (ids.empty()) return s.str() + "no jobs submitted (a dry run?)\n";
     std::string joined;
     for (const std::string& id : ids) joined += (joined.empty() ? "" : ",") + id;
     std::string out;
-    if (runCommand("squeue -h -j " + joined + " -o '%i %T %R'", out) == 0) s << (trim(out).empty() ? "squeue: no job of the farm is queued or running\n" : "squeue:\n" + trim(out) + "\n");
-    else s << "squeue unavailable: " << trim(out) << "\n";
-    if (runCommand("sacct -n -P -X -j " + joined + " -o JobID,State,ExitCode", out) == 0 && !trim(out).empty()) {
+    if (runProgram({"squeue", "-h", "-j", joined, "-o", "%i %T %R"}, out) == 0)
+        s << (trim(out).empty() ? "squeue: no job of the farm is queued or running\n" : "squeue:\n" + trim(out) + "\n");
+    else
+        s << "squeue unavailable: " << lastLine(out) << "\n";
+    if (runProgram({"sacct", "-n", "-P", "-X", "-j", joined, "-o", "JobID,State,ExitCode"}, out) == 0 && !trim(out).empty()) {
         s << "sacct:\n" << trim(out) << "\n";
     } else {
         // Accounting off: the tasks' logs say how each ended (the last progress event).
         s << "sacct unavailable (accounting off); task logs:\n";
         std::vector<fs::path> logs;
-        for (const auto& e : fs::directory_iterator(fs::path(plan.at("dir").get<std::string>()) / "logs", ec)) logs.push_back(e.path());
+        for (const auto& e : fs::directory_iterator(plan.dir / "logs", ec))
+            if (e.is_regular_file(ec)) logs.push_back(e.path());
         std::sort(logs.begin(), logs.end());
         for (const fs::path& l : logs) {
-            std::ifstream f(l);
-            std::string line, last;
-            while (std::getline(f, line))
-                if (!line.empty()) last = line;
+            // The last line of the last 64 KiB: a log is never read whole.
+            std::ifstream f(l, std::ios::binary);
+            f.seekg(0, std::ios::end);
+            const std::streamoff bytes = f.tellg();
+            const std::streamoff from = std::max<std::streamoff>(0, bytes - 65536);
+            f.seekg(from);
+            std::string tail(size_t(std::max<std::streamoff>(0, bytes - from)), '\0');
+            f.read(tail.data(), std::streamsize(tail.size()));
+            const std::string last = lastLine(tail);
             s << "  " << l.filename().string() << ": " << (last.size() > 160 ? last.substr(0, 160) + "..." : last) << "\n";
         }
     }

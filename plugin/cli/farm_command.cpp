@@ -59,7 +59,8 @@ void addFarmCommands(CLI::App& app, int& exitCode) {
     submit->add_option("--spp-split", so.sppSplit, "Sample splits per tile (divides spp; sets render.sample_block = spp/K)")
         ->check(CLI::Range(1, 4096));
     submit->add_option("--spp", so.spp, "Samples per pixel (overrides the scene)")->check(CLI::Range(1, 1 << 20));
-    submit->add_option("--partition", so.partition, "Slurm partition");
+    submit->add_option("--partition", so.partition, "Slurm partition(s): letters, digits, '.', '_', '-' (comma-separated list)");
+    submit->add_option("--account", so.account, "Slurm account: letters, digits, '.', '_', '-'");
     submit->add_option("--threads-per-task", so.threadsPerTask, "CPUs per task (default 1)")->check(CLI::Range(1, 1024));
     submit->add_option("--retries", so.retries, "Resubmissions of missing pieces (default 2)")->check(CLI::Range(0, 100));
     submit->add_option("--dir", so.farmDir, "Farm folder (default farm-<scene name>)");
