@@ -105,7 +105,10 @@ def run(cluster, specula, tmp, t0):
 
     # Job A: one frame in 2x2 tiles x 2 sample splits (8 tasks); job B: two frames whole (2 tasks).
     a = sp("farm", "submit", scene, "--frames", "1", "--tiles", "2x2", "--spp-split", "2", "--dir", os.path.join(tmp, "farmA"))
-    b = sp("farm", "submit", scene, "--frames", "1-2", "--dir", os.path.join(tmp, "farmB"))
+    # Farm B's folder holds spaces, a quote and a '$' (issue 35): sbatch gets it as one argv word (--chdir), the
+    # scripts' log paths are relative to it, and the exec line quotes it.
+    dir_b = os.path.join(tmp, "farm B's $(dir) & co")
+    b = sp("farm", "submit", scene, "--frames", "1-2", "--dir", dir_b)
     print(a.stdout + b.stdout, end="")
     job_a = [l for l in a.stdout.splitlines() if l.startswith("jobs:")][0].split()[2].rstrip(",")
 
@@ -134,14 +137,20 @@ def run(cluster, specula, tmp, t0):
         print(f"task {victim} finished before the kill landed; its piece was removed instead (same recovery path)")
 
     frames_a = os.path.join(tmp, "farmA", "frames", "farmscene_0001.exr")
-    frames_b = [os.path.join(tmp, "farmB", "frames", f"farmscene_{f:04d}.exr") for f in (1, 2)]
+    frames_b = [os.path.join(dir_b, "frames", f"farmscene_{f:04d}.exr") for f in (1, 2)]
     wait_for(lambda: os.path.exists(frames_a) and all(os.path.exists(p) for p in frames_b), 240, "the merged frames")
+    # The task and finish logs of farm B are in its own logs/ folder, whatever its name holds.
+    logs_b = sorted(os.listdir(os.path.join(dir_b, "logs")))
+    print(f"farm B logs: {logs_b}")
+    ok_logs = sum(l.startswith("task_") for l in logs_b) == 2 and any(l.startswith("finish_") for l in logs_b)
     status = sp("farm", "status", os.path.join(tmp, "farmA")).stdout
     print(status, end="")
     with open(os.path.join(tmp, "farmA", "plan.json")) as f:
         attempts = json.load(f)["attempts"]
     print(f"farm A: resubmissions {attempts}")
-    ok = True
+    ok = ok_logs
+    if not ok_logs:
+        print("FAIL: farm B's logs are not in its logs/ folder")
     if killed and attempts < 1:
         print("FAIL: the killed task's piece was not resubmitted")
         ok = False
