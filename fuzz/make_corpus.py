@@ -127,6 +127,66 @@ def images(out):
             put(out, "fuzz_image", bytes([i | 0x80]) + data)
 
 
+def farm_pieces(out):
+    """fuzz_merge seeds: pieces as `specula render` writes them (every specula:* attribute of a piece, a 'samples'
+    layer for sample splits), 2x2 frames: one whole frame, and its two sample splits (input: 1 byte count - 1, each
+    piece but the last preceded by its u32 length)."""
+    try:
+        import OpenImageIO as oiio
+        import numpy as np
+    except ImportError:
+        print("make_corpus: no OpenImageIO Python module (python3-openimageio): no fuzz_merge seeds")
+        return
+    import tempfile
+
+    def piece(path, split):
+        channels = ["R", "G", "B", "depth.Z"] + (["samples.N"] if split else [])
+        spec = oiio.ImageSpec(2, 2, len(channels), "float")
+        spec.channelnames = channels
+        attrs = {"scene_hash": "0ab84886150f14af", "frame": "3", "frame_size": "2x2", "crop": "0,0,2,2",
+                 "spp": "4", "seed": "0", "sample_block": "2" if split else "4", "version": "0.1.0"}
+        if split:
+            attrs["sample_split"] = split
+        for k, v in attrs.items():
+            spec.attribute("specula:" + k, v)
+        spec.attribute("compression", "zip")
+        px = (np.arange(2 * 2 * len(channels), dtype=np.float32).reshape(2, 2, len(channels)) % 5) / 4.0
+        if split:
+            px[:, :, -1] = 2.0  # the split's 2 samples per pixel
+        o = oiio.ImageOutput.create(path)
+        o.open(path, spec)
+        o.write_image(px)
+        o.close()
+        with open(path, "rb") as f:
+            return f.read()
+
+    with tempfile.TemporaryDirectory() as tmp:
+        whole = piece(os.path.join(tmp, "whole.exr"), None)
+        s0 = piece(os.path.join(tmp, "s0.exr"), "0/2")
+        s1 = piece(os.path.join(tmp, "s1.exr"), "1/2")
+    put(out, "fuzz_merge", b"\0" + whole)
+    put(out, "fuzz_merge", b"\1" + struct.pack("<I", len(s0)) + s0 + s1)
+
+
+def farm_plans(out):
+    """fuzz_farm_plan seeds: plans as `specula farm submit` writes them ("@FARM@" is the farm folder)."""
+    def plan(frames, tiles, splits):
+        tasks = []
+        for f in range(frames[0], frames[1] + 1):
+            for ty in range(tiles[1]):
+                for tx in range(tiles[0]):
+                    for sp in range(splits):
+                        tasks.append({"frame": f, "crop": [tx * 8 // tiles[0], ty * 6 // tiles[1], (tx + 1) * 8 // tiles[0],
+                                                           (ty + 1) * 6 // tiles[1]],
+                                      "split": [sp, splits], "piece": "pieces/f%04d_x%02d_y%02d_s%02d.exr" % (f, tx, ty, sp)})
+        return json.dumps({"version": 1, "name": "scene", "scene": "/shared/scenes/scene.json", "dir": "@FARM@",
+                           "specula": "/shared/bin/specula", "frames": list(frames), "tiles": list(tiles), "spp": 4,
+                           "spp_split": splits, "retries": 2, "threads_per_task": 1, "attempts": 0, "size": [8, 6],
+                           "tasks": tasks, "render_args": ["--seed", "3"]}, indent=1)
+    put(out, "fuzz_farm_plan", plan((1, 1), (1, 1), 1))
+    put(out, "fuzz_farm_plan", plan((1, 2), (2, 2), 2))
+
+
 def main():
     out = sys.argv[1]
     for path in json_files():
@@ -167,6 +227,8 @@ def main():
                 with open(path, "rb") as f:
                     put(out, "fuzz_image", bytes([("png", "exr").index(ext)]) + f.read())
     images(out)
+    farm_pieces(out)
+    farm_plans(out)
     for t in sorted(os.listdir(out)):
         print("make_corpus: %-11s %4d seeds" % (t, len(os.listdir(os.path.join(out, t)))))
 
