@@ -119,7 +119,6 @@ py::dict tileDict(const sp::Tile& t) {
 // PyErr_CheckSignals() every few milliseconds; a KeyboardInterrupt (or any exception of the callback) cancels the
 // job, waits for the workers to stop, then propagates.
 std::unique_ptr<PyResult> render(PyScene& self, py::object progress, int threads) {
-    if (threads < 0) throwUsage("threads must be >= 0 (0: all cores)");
     sp::RenderOptions ro;
     ro.threads = threads;
 

@@ -115,6 +115,17 @@ def test_load_limits():
         specula.Scene.from_dict(SCENE, limits={"json_depth": 1000})
 
 
+def test_option_ranges_are_the_cli_s():
+    # One table of option ranges for every front end (core/api/specula.h option_rules, issue 35): the values the CLI
+    # refuses with exit 2 are usage errors here too, with the same message.
+    with pytest.raises(specula.UsageError) as e:
+        scene().render(threads=-3)
+    assert "--threads -3 is outside 0..1024" in str(e.value)
+    with pytest.raises(specula.UsageError) as e:
+        specula.Scene.from_dict(SCENE, spp=(1 << 20) + 1)
+    assert "--spp" in str(e.value)
+
+
 def test_progress_tiles_cover_image():
     seen = []
     r = scene().render(progress=lambda t: seen.append(t))
