@@ -357,9 +357,12 @@ MergeSummary mergePieces(const std::vector<std::string>& paths, const std::strin
     }
     // Read back: the EXR writer does not see every failed write (a full disk or a file size limit left a truncated
     // frame that it reported written), and a frame is what the farm exists to produce.
+    const size_t layers = out.aovs.size();
+    out = ImageSet();  // the frame's memory back before the file's
+    pieces.clear();
     try {
         const ImageSet back = readImageSet(outPath, maxPiecePixels);
-        if (back.width != sum.width || back.height != sum.height || back.aovs.size() != out.aovs.size())
+        if (back.width != sum.width || back.height != sum.height || back.aovs.size() != layers)
             throw ImageIoError("it reads back as another image");
     } catch (const ImageIoError& e) {
         fs::remove(outPath, ec);
