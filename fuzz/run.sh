@@ -19,7 +19,7 @@ smoke_runs() {  # executions of each target in about a minute under ASan on 2 co
   # fuzz_gltf_scene: about 30 s estimated from fuzz_scene's rate, a render per loading input like it; not yet measured;
   # fuzz_merge, fuzz_farm_plan: about 30 s each, estimated (fuzz_image's EXR reads; plan checks are JSON only))
   case "$1" in
-    fuzz_glsl) echo 150000 ;; fuzz_mesh) echo 40000 ;; fuzz_scene) echo 20000 ;; fuzz_graph) echo 10000 ;; fuzz_image) echo 4000 ;; fuzz_gltf_scene) echo 8000 ;;
+    fuzz_glsl) echo 150000 ;; fuzz_mesh) echo 40000 ;; fuzz_scene) echo 20000 ;; fuzz_graph) echo 10000 ;; fuzz_image) echo 4000 ;; fuzz_gltf_scene) echo 6000 ;;
     fuzz_merge) echo 3000 ;; fuzz_farm_plan) echo 20000 ;; *) echo 300 ;;
   esac
 }
