@@ -19,7 +19,7 @@ std::string jsonTypeName(const Json& j) {
     }
 }
 
-static std::string fmt(float v) {
+static std::string fmt(double v) {
     std::ostringstream s;
     s << v;
     return s.str();
@@ -53,7 +53,9 @@ float JsonReader::toNumber(const Json& v, const std::string& ptr, float lo, floa
     // Compared as the float the scene stores: a documented bound such as 1e12 is itself a rounded float (999999995904),
     // so the double 1e12 would fall just outside it.
     const float f = float(d);
-    if (f < lo || f > hi) throw InputError(ptr, "value " + fmt(f) + " is outside [" + fmt(lo) + ", " + fmt(hi) + "]");
+    // The double in the message: a value beyond float's range (1e39) reads as itself, not as "inf".
+    if (!(f >= lo && f <= hi))
+        throw InputError(ptr, "value " + fmt(std::isfinite(f) ? double(f) : d) + " is outside [" + fmt(lo) + ", " + fmt(hi) + "]");
     return f;
 }
 
@@ -110,7 +112,7 @@ std::string JsonReader::enumeration(const std::string& key, const std::string& d
 
 Vec3 JsonReader::vec3(const std::string& key, const Vec3& def) const {
     if (!has(key)) return def;
-    auto v = numbers(key, 3, {}, -1e30f, 1e30f);
+    auto v = numbers(key, 3, {}, -kMaxSceneCoordinate, kMaxSceneCoordinate);
     return {v[0], v[1], v[2]};
 }
 
@@ -121,7 +123,7 @@ Vec3 JsonReader::requiredVec3(const std::string& key) const {
 
 Color3 JsonReader::color(const std::string& key, const Color3& def) const {
     if (!has(key)) return def;
-    auto v = numbers(key, 3, {}, 0.f, 1e30f);
+    auto v = numbers(key, 3, {}, 0.f, kMaxSceneColor);
     return {v[0], v[1], v[2]};
 }
 

@@ -14,6 +14,15 @@ namespace specula {
 
 using Json = nlohmann::json;
 
+// Bounds that keep the renderer's float arithmetic finite (docs/scene-format.md "Value forms", issue 35). A finite
+// double such as 3.5e30 still overflows float products: a camera that far away had a squared distance of inf.
+// Positions (and every other vector: directions, up, Euler angles, translations) are limited to ±1e8 scene units, and
+// so is every world-space vertex after its shape's transform: the largest product the renderer forms from
+// coordinates is a cross product's squared length, about 144·x⁴ = 1.4e34 at x = 1e8 (float ends at 3.4e38). Colours
+// are limited to 1e6 per component: times the largest strength (power 1e12) that stays below 1e18.
+constexpr float kMaxSceneCoordinate = 1e8f;
+constexpr float kMaxSceneColor = 1e6f;
+
 std::string jsonTypeName(const Json& j);
 
 class JsonReader {
@@ -36,9 +45,10 @@ public:
     std::string requiredString(const std::string& key) const;
     // One of 'options' (suggestion on mismatch).
     std::string enumeration(const std::string& key, const std::string& def, const std::vector<std::string>& options) const;
+    // Each component in [-kMaxSceneCoordinate, kMaxSceneCoordinate].
     Vec3 vec3(const std::string& key, const Vec3& def) const;
     Vec3 requiredVec3(const std::string& key) const;
-    // A colour: [r,g,b] (each ≥ 0) or a single number (grey).
+    // A colour: [r,g,b] (each in [0, kMaxSceneColor]) or a single number (grey).
     Color3 color(const std::string& key, const Color3& def) const;
     // A number or an array of 'n' numbers.
     std::vector<float> numbers(const std::string& key, size_t n, const std::vector<float>& def, float lo, float hi) const;

@@ -115,6 +115,16 @@ std::vector<InvalidCase> invalidCases() {
          "", "number overflow", ""},
         {"lights_not_array", scene(R"("lights": {"type": "point"})"), "/lights", "expected an array", ""},
         {"unknown_view", scene(R"("color": {"view": "Filmc"})"), "/color/view", "unknown view 'Filmc'", "Filmic"},
+        // Finite doubles that overflow float arithmetic (issue 35; docs/scene-format.md "Float-safe bounds").
+        {"camera_distance_overflows_float",
+         scene("", R"("camera": {"position": [-1e30, -1e30, -1e30], "look_at": [1e30, 1e30, 1e30]})"),
+         "/camera/position/0", "value -1e+30 is outside [-1e+08, 1e+08]", ""},
+        {"light_color_overflows_with_power",
+         scene(R"("lights": [{"type": "point", "position": [0,0,3], "power": 1e12, "color": [1, 1e30, 1]}])"),
+         "/lights/0/color/1", "value 1e+30 is outside [0, 1e+06]", ""},
+        {"shape_reach_beyond_world_bound",
+         scene("", kCamera, kMaterials, R"("shapes": [{"type": "sphere", "radius": 1e7, "material": "grey", "transform": {"scale": [1, 1, 1e7]}}])"),
+         "/shapes/0/transform", "reaches 1e+14 scene units from the origin after its transform; world coordinates are limited to [-1e+08, 1e+08]", ""},
     };
 }
 
