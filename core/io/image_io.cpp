@@ -59,29 +59,6 @@ std::string joinNames(const std::vector<std::string>& v) {
     return s;
 }
 
-// Writes an uint8 or float image with OIIO to 'path' atomically.
-void writeImageAtomic(const std::string& path, const OIIO::ImageSpec& spec, const void* data, const char* format,
-                      const char* what) {
-    std::string tmp = createTempFileNear(path);
-    try {
-        auto out = OIIO::ImageOutput::create(format);  // by format name: 'path' may lack an extension
-        if (!out) throw ImageIoError(std::string("cannot write ") + what + " '" + path + "': " + OIIO::geterror());
-        if (!out->open(tmp, spec))
-            throw ImageIoError(std::string("cannot write ") + what + " '" + path + "': " + out->geterror());
-        if (!out->write_image(spec.format, data)) {
-            std::string err = out->geterror();
-            out->close();
-            throw ImageIoError(std::string("cannot write ") + what + " '" + path + "': " + err);
-        }
-        if (!out->close())
-            throw ImageIoError(std::string("cannot write ") + what + " '" + path + "': " + out->geterror());
-    } catch (...) {
-        removeQuietly(tmp);
-        throw;
-    }
-    commitTempFile(tmp, path);
-}
-
 // Order of channels inside a layer: R,G,B,A / X,Y,Z,W / U,V / others in file order.
 int channelRank(const std::string& c) {
     static const char* order[] = {"R", "G", "B", "A", "X", "Y", "Z", "W", "U", "V"};
@@ -102,6 +79,39 @@ std::vector<uint8_t> quantise8(const std::vector<float>& v) {
 }
 
 }  // namespace
+
+// Writes an uint8 or float image with OIIO to 'path' atomically (core/io/image_read.h).
+void writeImageAtomic(const std::string& path, const OIIO::ImageSpec& spec, const void* data, const char* format,
+                      const char* what, OIIO::TypeDesc dataType) {
+    std::string tmp = createTempFileNear(path);
+    const std::string cannot = std::string("cannot write ") + what + " '" + path + "': ";
+    try {
+        auto out = OIIO::ImageOutput::create(format);  // by format name: 'path' may lack an extension
+        if (!out) throw ImageIoError(cannot + OIIO::geterror());
+        if (!out->open(tmp, spec)) throw ImageIoError(cannot + out->geterror());
+        if (!out->write_image(dataType == OIIO::TypeDesc::UNKNOWN ? spec.format : dataType, data)) {
+            std::string err = out->geterror();
+            out->close();
+            throw ImageIoError(cannot + err);
+        }
+        if (!out->close()) throw ImageIoError(cannot + out->geterror());
+        // Neither OpenImageIO's PNG writer nor OpenEXR reports every failed write (a full disk, a file-size limit:
+        // issue 35): the last row is read back, which needs the whole file (PNG rows are sequential; an EXR's last
+        // chunk is at its end), so a truncated file is an error and never takes the name.
+        auto in = OIIO::ImageInput::open(tmp);
+        std::vector<float> row(size_t(spec.width) * size_t(std::max(spec.nchannels, 1)));
+        const bool whole = in && in->spec().width == spec.width && in->spec().height == spec.height &&
+                           in->read_scanlines(0, 0, spec.height - 1, spec.height, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT,
+                                              row.data());
+        if (in) in->close();
+        if (!whole) throw ImageIoError(cannot + "the file written is incomplete (is the disk full?)");
+    } catch (...) {
+        removeQuietly(tmp);
+        throw;
+    }
+    commitTempFile(tmp, path);
+}
+
 
 const AovBuffer* ImageSet::find(const std::string& name) const {
     for (const auto& a : aovs)

@@ -9,6 +9,13 @@
 
 namespace specula {
 
+// Writes 'data' (of 'dataType', default spec.format) as 'format' ("openexr", "png", ...) to a temporary beside
+// 'path' and renames it over 'path' once complete. Its last row is read back first: neither OpenImageIO's PNG writer
+// nor OpenEXR reports every failed write (a full disk, a file-size limit), and a truncated file must never take the
+// name. Throws ImageIoError "cannot write <what> '<path>': ...". Internal to the io module.
+void writeImageAtomic(const std::string& path, const OIIO::ImageSpec& spec, const void* data, const char* format,
+                      const char* what, OIIO::TypeDesc dataType = OIIO::TypeDesc::UNKNOWN);
+
 // Why a file would make a decoder allocate beyond what it holds, or "" when it would not. Only OpenEXR needs it: its
 // header reader allocates every attribute at the size the attribute declares before reading it (a 200-byte file
 // declaring a 2 GiB attribute allocates 2 GiB; under ASan that poisoning was most of fuzz_image's time). The walk

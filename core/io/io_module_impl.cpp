@@ -2,6 +2,7 @@
 // libspecula_io.so together with image_io.cpp, texture_store.cpp and normal_map_gen.cpp. Linked with
 // -Bsymbolic-functions, so every name below binds to the module's own definition, not to libspecula's stub.
 #include "core/io/io_module.h"
+#include "core/io/image_read.h"
 
 #include "core/util/error.h"
 
@@ -17,12 +18,15 @@ namespace specula {
 // An 8-bit image of w*h*channels floats in [0,1] (format from the extension), e.g. `specula plot`.
 void writeImage8(const std::string& path, int width, int height, int channels, const float* pixels,
                  const std::string& description) {
-    auto out = OIIO::ImageOutput::create(path);
-    if (!out) throw IoError("cannot write '" + path + "': unsupported format");
+    // Through a temporary, like every image libspecula writes: a full disk (OpenImageIO's PNG writer does not report
+    // every short write) must leave no truncated file under the name; the size is checked after closing.
+    auto probe = OIIO::ImageOutput::create(path);
+    if (!probe) throw IoError("cannot write '" + path + "': unsupported format");
+    const std::string format = probe->format_name();
+    probe.reset();
     OIIO::ImageSpec spec(width, height, channels, OIIO::TypeDesc::UINT8);
     if (!description.empty()) spec.attribute("ImageDescription", description);
-    if (!out->open(path, spec) || !out->write_image(OIIO::TypeDesc::FLOAT, pixels) || !out->close())
-        throw IoError("cannot write '" + path + "': " + out->geterror());
+    writeImageAtomic(path, spec, pixels, format.c_str(), "image", OIIO::TypeDesc::FLOAT);  // floats in, 8 bits out
 }
 
 namespace {

@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include <chrono>
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <regex>
@@ -383,6 +384,46 @@ TEST(Cli, NoOutputReplacesAnInputUnderAnotherName) {
     EXPECT_EQ(test::readFile(dir + "/s.json"), scene);
     // A name that is only similar is no input: the render is written.
     EXPECT_EQ(test::runCli("render " + q(dir + "/s.json") + " --progress none -o " + q(dir + "/t2.png"), &out), 0) << out;
+}
+
+// Issue 35 class 6: a write that fails for lack of space is an I/O error (exit 3, docs/cli.md) for every command that
+// writes, and leaves no file, whole or partial, in the full folder. A 64 KiB tmpfs, filled up, stands for the full
+// disk; mounting one needs root (CI runs as root), so elsewhere the test is skipped.
+TEST(Cli, WriteFailuresOnAFullDiskExitThreeAndLeaveNothing) {
+    const std::string dir = test::tempDir("cli-full"), full = dir + "/full";
+    fs::create_directories(full);
+    if (std::system(("mount -t tmpfs -o size=64k tmpfs " + q(full) + " 2>/dev/null").c_str()) != 0)
+        GTEST_SKIP() << "cannot mount a tmpfs here (not root?)";
+    struct Unmount {
+        std::string path;
+        ~Unmount() { (void)std::system(("umount " + path).c_str()); }
+    } unmount{q(full)};
+    fs::create_directories(full + "/res");
+    test::writeFile(dir + "/m.json",
+                    R"({"materials": {"m": {"nodes": {"s": {"type": "bsdf.diffuse", "inputs": {"color": [0.5, 0.5, 0.5]}}}, "output": "@s.bsdf"}}})");
+    ASSERT_EQ(std::system(("dd if=/dev/zero of=" + q(full + "/fill") + " bs=1k count=64 2>/dev/null").c_str()), 0);
+    ASSERT_EQ(test::runCli("render " + q(test::sourcePath("examples/metals.json")) + " --resolution 32x24 --spp 1 --crop 0,0,16,24 " +
+                           "--progress none -o " + q(dir + "/a.exr")), 0);
+    ASSERT_EQ(test::runCli("render " + q(test::sourcePath("examples/metals.json")) + " --resolution 32x24 --spp 1 --crop 16,0,32,24 " +
+                           "--progress none -o " + q(dir + "/b.exr")), 0);
+    const std::vector<std::string> commands = {
+        "glsl " + q(dir + "/m.json") + " -o " + q(dir + "/m.glsl") + " --resources " + q(full + "/res"),
+        "glsl " + q(dir + "/m.json") + " -o " + q(full + "/m.glsl"),
+        "render " + q(test::sourcePath("examples/metals.json")) + " --resolution 32x24 --spp 1 --progress none -o " + q(full + "/o.exr"),
+        "normalmap --kind bumps --size 64 -o " + q(full + "/n.exr"),
+        "plot " + q(dir + "/m.json") + " --wo 0,0,1 -o " + q(full + "/p.png"),
+        "merge " + q(dir + "/a.exr") + " " + q(dir + "/b.exr") + " -o " + q(full + "/frame.exr"),
+    };
+    for (const std::string& c : commands) {
+        std::string out;
+        EXPECT_EQ(test::runCli(c, &out), 3) << c << "\n" << out;
+        EXPECT_NE(out.find("cannot write"), std::string::npos) << c << "\n" << out;
+    }
+    std::vector<std::string> left;
+    for (const auto& e : fs::recursive_directory_iterator(full)) left.push_back(e.path().filename().string());
+    std::sort(left.begin(), left.end());
+    EXPECT_EQ(left, (std::vector<std::string>{"fill", "res"}));
+    EXPECT_FALSE(fs::exists(dir + "/m.glsl"));  // the module is not written when its resources could not be
 }
 
 // specula plot --raw writes the lobe panel's float values: a pixel equals specula bsdf for its direction.
