@@ -277,6 +277,8 @@ void readShape(const Json& j, const std::string& ptr, Context& ctx) {
         const int gltfMaterial = r.has("gltf_material") ? r.integer("gltf_material", -1, -1, 1 << 20) : kAllGltfMaterials;
         try {
             b.mesh = loadMesh(file, shading, &sh.attributes, gltfMaterial);
+        } catch (const GltfValueError& e) {  // a value out of range is bad input here too, as in a glTF scene (exit 1)
+            throw InputError(r.pointer("file"), e.file + "#" + e.pointer + ": " + e.reason);
         } catch (const MeshLoadError& e) {
             throw IoError(r.pointer("file") + ": " + e.what());
         }
