@@ -5,6 +5,8 @@
 
 // Debian's tinyobjloader package ships the compiled library (linked through
 // tinyobjloader::tinyobjloader), so TINYOBJLOADER_IMPLEMENTATION must not be defined here.
+#include "core/util/input_files.h"
+
 #include <tiny_obj_loader.h>
 
 #include <algorithm>
@@ -498,6 +500,7 @@ TriangleMesh loadMesh(const std::string& path, const MeshShading& shading, MeshA
     std::error_code ec;
     if (!std::filesystem::exists(path, ec)) throwMeshError(path, "file not found");
     if (!std::filesystem::is_regular_file(path, ec)) throwMeshError(path, "not a regular file");
+    noteInputFile(path);  // no output of this command may replace it (core/util/input_files.h)
     const std::string ext = lowerExtension(path);
     TriangleMesh mesh;
     if (ext == ".obj")

@@ -4,6 +4,7 @@
 #include "core/geometry/mesh_io_detail.h"
 #include "core/util/cache_dir.h"
 #include "core/util/error.h"
+#include "core/util/input_files.h"
 
 #include <algorithm>
 #include <atomic>
@@ -149,6 +150,7 @@ bool isGltfScenePath(const std::string& path) {
 nlohmann::json gltfSceneDocument(const std::string& path) {
     std::error_code ec;
     if (!fs::is_regular_file(path, ec)) throw IoError("cannot open glTF scene '" + path + "'");
+    noteInputFile(path);
     GltfSceneInfo info;
     try {
         info = detail::describeGltfScene(path, lowerExtension(path) == ".glb", &saveImage);
