@@ -336,6 +336,37 @@ std::string imageHeaderProblem(const std::string& path, int64_t maxSide, int64_t
         if (size < 0 || uint64_t(size) > left)
             return "its OpenEXR header's attribute '" + name + "' (" + type + ") declares " + std::to_string(size) +
                    " bytes, but only " + std::to_string(left) + " bytes follow in the file";
+        if (type == "chlist") {
+            // OpenEXR reads a channel list entry by entry (a name, then 16 bytes) up to an empty name, whatever size
+            // the attribute declares, and reads the next attribute from where the list ended: a list that does not
+            // end exactly at its declared size would put the decoder's reading out of step with this walk (a fuzzed
+            // 772-byte piece then had it allocate 2 GB for a string). Such a list is refused (issue 35).
+            int64_t used = 0;
+            std::string channel;
+            for (;;) {
+                if (!readString(channel)) return "its OpenEXR header's channel list is malformed (a name longer than 255 bytes or cut off)";
+                used += int64_t(channel.size()) + 1;
+                if (channel.empty()) break;
+                if (!f.seekg(16, std::ios::cur) || used + 16 > size) break;
+                used += 16;
+            }
+            if (used != size)
+                return "its OpenEXR header's channel list '" + name + "' declares " + std::to_string(size) +
+                       " bytes but its entries take " + (used > size ? "more" : std::to_string(used));
+            continue;
+        }
+        if (type == "preview") {
+            // A preview image is allocated at the width x height its first 8 bytes declare, before its pixels are read.
+            unsigned char wh[8];
+            if (size < 8 || !f.read(reinterpret_cast<char*>(wh), 8)) return "its OpenEXR header's preview is cut off";
+            const uint64_t pw = uint32_t(wh[0]) | uint32_t(wh[1]) << 8 | uint32_t(wh[2]) << 16 | uint32_t(wh[3]) << 24;
+            const uint64_t ph = uint32_t(wh[4]) | uint32_t(wh[5]) << 8 | uint32_t(wh[6]) << 16 | uint32_t(wh[7]) << 24;
+            if (pw * ph * 4 + 8 != uint64_t(size))
+                return "its OpenEXR header's preview declares " + std::to_string(pw) + "x" + std::to_string(ph) +
+                       " pixels in an attribute of " + std::to_string(size) + " bytes";
+            f.seekg(std::streamoff(size - 8), std::ios::cur);
+            continue;
+        }
         if (name == "dataWindow" && type == "box2i" && size == 16) {
             // OpenEXR sizes its line buffers by the data window when it opens the file (a 215-byte file declaring
             // 16794113x1 half RGB pixels asks for 16 lines of 100 MB each, by our count, for ZIP), so the caller's
