@@ -18,6 +18,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <map>
 #include <fstream>
 #include <limits>
 #include <memory>
@@ -336,6 +337,17 @@ std::string imageHeaderProblem(const std::string& path, int64_t maxSide, int64_t
         if (size < 0 || uint64_t(size) > left)
             return "its OpenEXR header's attribute '" + name + "' (" + type + ") declares " + std::to_string(size) +
                    " bytes, but only " + std::to_string(left) + " bytes follow in the file";
+        // OpenEXR reads a value of a fixed-size type at its type's size, whatever size the attribute declares, and
+        // the next attribute from there: a declared size that differs would put the decoder out of step with this
+        // walk (fuzz_merge: a float attribute declaring 0 bytes), so it is refused.
+        static const std::map<std::string, int64_t> fixedSizes = {
+            {"box2i", 16}, {"box2f", 16}, {"int", 4}, {"float", 4}, {"double", 8}, {"v2i", 8}, {"v2f", 8}, {"v2d", 16},
+            {"v3i", 12}, {"v3f", 12}, {"v3d", 24}, {"m33f", 36}, {"m33d", 72}, {"m44f", 64}, {"m44d", 128},
+            {"compression", 1}, {"lineOrder", 1}, {"envmap", 1}, {"deepImageState", 1}, {"chromaticities", 32},
+            {"keycode", 28}, {"timecode", 8}, {"rational", 8}, {"tiledesc", 9}};
+        if (const auto fixed = fixedSizes.find(type); fixed != fixedSizes.end() && fixed->second != size)
+            return "its OpenEXR header's attribute '" + name + "' (" + type + ") declares " + std::to_string(size) +
+                   " bytes; a " + type + " takes " + std::to_string(fixed->second);
         if (type == "chlist") {
             // OpenEXR reads a channel list entry by entry (a name, then 16 bytes) up to an empty name, whatever size
             // the attribute declares, and reads the next attribute from where the list ended: a list that does not
