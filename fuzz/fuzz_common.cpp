@@ -1,6 +1,9 @@
 // Shared pieces of the libFuzzer targets (fuzz_common.h).
 #include "fuzz/fuzz_common.h"
 
+#include "core/render/renderer.h"
+#include "core/util/error.h"
+
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -21,6 +24,21 @@ const std::string& scratchDir() {
 void clearScratch() {
     std::error_code ec;
     for (auto& e : std::filesystem::directory_iterator(scratchDir(), ec)) std::filesystem::remove_all(e.path(), ec);
+}
+
+void loadAndRenderTiny(const std::function<Scene(const SceneOverrides&)>& load) {
+    SceneOverrides ov;
+    ov.width = 16;
+    ov.height = 12;
+    ov.spp = 1;
+    ov.limits.maxTextureSide = kFuzzTextureSide;
+    try {
+        Scene scene = load(ov);
+        RenderOptions ro;
+        ro.threads = 1;
+        (void)renderScene(scene, ro);
+    } catch (const Error&) {
+    }
 }
 
 std::string writeScratch(const std::string& name, const uint8_t* data, size_t size) {

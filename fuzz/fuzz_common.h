@@ -3,11 +3,14 @@
 #pragma once
 
 #include "core/render/shading.h"
+#include "core/scene/scene.h"
+#include "core/scene/scene_loader.h"
 
 #include <nlohmann/json.hpp>
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <string>
 
 namespace specula::fuzz {
@@ -26,6 +29,11 @@ std::string writeScratch(const std::string& name, const uint8_t* data, size_t si
 
 // The input as JSON; false for text the JSON parser rejects (not a finding: the parser is not ours).
 bool parseJson(const uint8_t* data, size_t size, nlohmann::json& out);
+
+// The scene targets' end: 'load' with a 16x12, 1-spp override and textures capped at kFuzzTextureSide (a mutant
+// asking for a 1024² P-NDF or LTC prefilter, over 60 s under ASan, takes the refusal path instead of stalling the
+// campaign), then a one-thread render of what loads; specula::Error is the documented way out and is swallowed.
+void loadAndRenderTiny(const std::function<Scene(const SceneOverrides&)>& load);
 
 // A shading point with differentials, as a camera ray at a unit sphere would give.
 ShadingPoint fuzzShadingPoint();

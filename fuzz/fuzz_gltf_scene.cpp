@@ -48,19 +48,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         if (part == 0) scenePath = path;
         begin = end + kSeparator.size();
     }
-    SceneOverrides ov;
-    ov.width = 16;
-    ov.height = 12;
-    ov.spp = 1;
-    ov.limits.maxTextureSide = fuzz::kFuzzTextureSide;
-    try {
-        Scene scene = loadScene(scenePath, ov);
-        RenderOptions ro;
-        ro.threads = 1;
-        RenderOutput out = renderScene(scene, ro);
-        (void)out;
-    } catch (const Error&) {
-    }
+    fuzz::loadAndRenderTiny([&](const SceneOverrides& ov) { return loadScene(scenePath, ov); });
     // Embedded images are written to the texture cache, named by content: every mutant would add one.
     std::error_code ec;
     std::filesystem::remove_all(cacheFolder("gltf-images"), ec);
