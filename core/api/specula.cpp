@@ -68,14 +68,6 @@ std::string partialOutputPath(const std::string& outPath) {
     return fs::path(outPath).replace_extension(".partial.exr").string();
 }
 
-namespace {
-bool samePath(const std::string& a, const std::string& b) {
-    std::error_code ea, eb;
-    fs::path pa = fs::weakly_canonical(a, ea), pb = fs::weakly_canonical(b, eb);
-    return !ea && !eb && pa == pb;
-}
-}  // namespace
-
 void refuseOverwritingInput(const std::string& output, const std::vector<std::string>& inputs, const std::string& option) {
     if (!output.empty()) refuseOverwritingInputs(output, inputs, option);
 }
@@ -87,7 +79,7 @@ void checkOutputPath(const std::string& exrPath, const std::string& inputPath) {
                                           "it) or .png (the viewed image only)");
     if (!inputPath.empty()) {
         for (const std::string& out : {exrPath, fs::path(exrPath).replace_extension(".png").string(), partialOutputPath(exrPath)})
-            if (samePath(out, inputPath))
+            if (sameFile(out, inputPath))
                 throw Error(ErrorCode::Usage, "", "output '" + out + "' would overwrite the input '" + inputPath + "'");
     }
     fs::path dir = fs::path(exrPath).parent_path();
@@ -109,7 +101,7 @@ WrittenFiles writeRenderResult(const std::string& exrPath, const Scene& scene, I
 }
 
 void checkOption(const OptionRule& rule, double value) {
-    if (value >= rule.min && value <= rule.max) return;  // false for NaN
+    if (rule.contains(value)) return;
     auto text = [](double v) {
         char buf[32];
         std::snprintf(buf, sizeof buf, "%.10g", v);

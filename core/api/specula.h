@@ -49,6 +49,7 @@ WrittenFiles writeRenderResult(const std::string& exrPath, const Scene& scene, I
 struct OptionRule {
     const char* name;
     double min, max;  // inclusive; NaN is outside every range
+    constexpr bool contains(double value) const { return value >= min && value <= max; }
 };
 namespace option_rules {
 inline constexpr OptionRule spp{"--spp", 1, 1 << 20};

@@ -62,8 +62,7 @@ void refuseOverwritingInputs(const std::string& output, const std::vector<std::s
     FileId out;
     if (!fileId(output, out)) return;  // nothing there yet: it cannot be an input
     for (const std::string& in : inputs) {
-        FileId id;
-        if (fileId(in, id) && id == out)
+        if (sameFile(output, in))
             throw Error(ErrorCode::Usage, "", option + " '" + output + "' is the input file '" + in + "'");
     }
     Registry& r = registry();
@@ -72,6 +71,11 @@ void refuseOverwritingInputs(const std::string& output, const std::vector<std::s
     if (it != r.files.end())
         throw Error(ErrorCode::Usage, "", option + " '" + output + "' is the input file '" + it->second +
                                               "' of this command; write it elsewhere");
+}
+
+bool sameFile(const std::string& a, const std::string& b) {
+    FileId ia, ib;
+    return fileId(a, ia) && fileId(b, ib) && ia == ib;
 }
 
 std::vector<std::string> notedInputFiles() {

@@ -27,6 +27,9 @@ void noteInputFile(const std::string& path);
 // the API argument ("-o", "--resources", "output").
 void refuseOverwritingInputs(const std::string& output, const std::vector<std::string>& inputs, const std::string& option);
 
+// Whether both paths name one existing file (same device and inode: links and other spellings included).
+bool sameFile(const std::string& a, const std::string& b);
+
 // The noted files (for messages and tests).
 std::vector<std::string> notedInputFiles();
 

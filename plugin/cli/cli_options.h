@@ -11,8 +11,6 @@
 
 namespace specula {
 
-inline bool inRange(const OptionRule& rule, double value) { return value >= rule.min && value <= rule.max; }
-
 // A validator for an option whose rule is 'rule': numbers only, NaN and infinities refused, the message the API gives.
 inline CLI::Validator optionCheck(const OptionRule& rule) {
     return CLI::Validator(
@@ -21,7 +19,7 @@ inline CLI::Validator optionCheck(const OptionRule& rule) {
                 size_t used = 0;
                 const double v = std::stod(text, &used);
                 if (used != text.size()) return std::string(rule.name) + " expects a number, got '" + text + "'";
-                if (!inRange(rule, v))  // CLI11 puts the option's name in front
+                if (!rule.contains(v))  // CLI11 puts the option's name in front
                     return "value " + text + " is outside " + CLI::detail::to_string(rule.min) + ".." + CLI::detail::to_string(rule.max);
             } catch (const std::exception&) {
                 return std::string(rule.name) + " expects a number, got '" + text + "'";

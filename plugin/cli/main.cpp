@@ -151,7 +151,7 @@ int main(int argc, char** argv) {
             exitCode = kExitUsage;
             return;
         }
-        if (!resolution.empty() && !(inRange(option_rules::resolutionSide, ov.width) && inRange(option_rules::resolutionSide, ov.height))) {
+        if (!resolution.empty() && !(option_rules::resolutionSide.contains(ov.width) && option_rules::resolutionSide.contains(ov.height))) {
             std::fprintf(stderr, "specula: error: --resolution %s is outside 1x1..16384x16384\n", resolution.c_str());
             exitCode = kExitUsage;
             return;
@@ -198,7 +198,7 @@ int main(int argc, char** argv) {
         if (printCameraIfAsked(scene, shiftOpts)) return;
         try {  // the scene is loaded: no output may replace a file it read (a texture, a mesh), checked before rendering
             for (const std::string& out : {outPath, fs::path(outPath).replace_extension(".png").string(), partialOutputPath(outPath)})
-                refuseOverwritingInputs(out, {scenePath}, "-o");
+                refuseOverwritingInputs(out, {}, "-o");  // the scene itself was noted when read
         } catch (const Error& e) {
             exitCode = reportError(e, e.exitCode());
             return;
