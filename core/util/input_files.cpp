@@ -3,6 +3,7 @@
 
 #include "core/util/error.h"
 
+#include <filesystem>
 #include <map>
 #include <mutex>
 #include <sys/stat.h>
@@ -75,7 +76,13 @@ void refuseOverwritingInputs(const std::string& output, const std::vector<std::s
 
 bool sameFile(const std::string& a, const std::string& b) {
     FileId ia, ib;
-    return fileId(a, ia) && fileId(b, ib) && ia == ib;
+    const bool haveA = fileId(a, ia), haveB = fileId(b, ib);
+    if (haveA && haveB) return ia == ib;
+    if (haveA != haveB || a.empty() || b.empty()) return false;
+    // Neither exists yet (an input about to be written, a path a host has not created): one name, one file.
+    std::error_code ec1, ec2;
+    const std::filesystem::path ca = std::filesystem::weakly_canonical(a, ec1), cb = std::filesystem::weakly_canonical(b, ec2);
+    return !ec1 && !ec2 && ca == cb;
 }
 
 std::vector<std::string> notedInputFiles() {

@@ -27,7 +27,8 @@ void noteInputFile(const std::string& path);
 // the API argument ("-o", "--resources", "output").
 void refuseOverwritingInputs(const std::string& output, const std::vector<std::string>& inputs, const std::string& option);
 
-// Whether both paths name one existing file (same device and inode: links and other spellings included).
+// Whether both paths name one file: same device and inode when both exist (links and other spellings included),
+// the same normalised path when neither exists yet.
 bool sameFile(const std::string& a, const std::string& b);
 
 // The noted files (for messages and tests).
