@@ -14,7 +14,7 @@
 #include "core/codegen/glsl_sources.h"
 #include "core/graph/graph_material.h"
 #include "core/ltc/ltc_ggx.h"
-#include "core/ltc/ltc_gpu.h"
+#include "nodes/shared/ltc_gpu.h"
 #include "glsl_harness.h"
 #include "tests/unit/test_support.h"
 

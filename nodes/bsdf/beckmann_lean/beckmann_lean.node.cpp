@@ -6,7 +6,7 @@
 #include "nodes/shared/bsdf_ports.h"
 
 #include "core/graph/closure_util.h"
-#include "core/ltc/ltc_gpu.h"
+#include "nodes/shared/ltc_gpu.h"
 #include "nodes/bsdf/beckmann_lean/beckmann_lean.h"
 
 namespace specula::nodes {

@@ -2,7 +2,7 @@
 #include "nodes/node_common.h"
 
 #include "core/graph/closure_util.h"
-#include "core/ltc/ltc_gpu.h"
+#include "nodes/shared/ltc_gpu.h"
 #include "core/render/lobes/lambert.h"
 
 namespace specula::nodes {

@@ -6,7 +6,7 @@
 #include "nodes/node_common.h"
 
 #include "core/graph/closure_util.h"
-#include "core/ltc/ltc_gpu.h"
+#include "nodes/shared/ltc_gpu.h"
 #include "core/render/shading.h"
 #include "nodes/bsdf/ggx_filtered/filtered_ggx.h"
 

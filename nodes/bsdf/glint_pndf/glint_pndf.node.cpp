@@ -9,7 +9,7 @@
 #include "nodes/node_common.h"
 
 #include "core/graph/closure_util.h"
-#include "core/ltc/ltc_gpu.h"
+#include "nodes/shared/ltc_gpu.h"
 #include "nodes/bsdf/ggx_filtered/filtered_ggx.h"
 #include "nodes/bsdf/glint_pndf/pndf_cache.h"
 #include "nodes/bsdf/glint_pndf/pndf_lobe.h"

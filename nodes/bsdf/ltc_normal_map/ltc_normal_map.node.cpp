@@ -4,7 +4,7 @@
 
 #include "core/graph/closure_util.h"
 #include "core/graph/graph_material.h"
-#include "core/ltc/ltc_gpu.h"
+#include "nodes/shared/ltc_gpu.h"
 #include "core/ltc/ltc_prefilter.h"
 #include "core/ltc/ltc_tables.h"
 #include "core/texture/normal_map_gen.h"

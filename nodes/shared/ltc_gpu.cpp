@@ -1,6 +1,6 @@
 // Texels and sampler state of the LTC tables for the GPU (ltc_gpu.h): repacks ltc::builtinTables() into the RGBA32F
 // layouts nodes/shared/ltc.glsl reads, so the GLSL lookups reproduce ltc::ggxIsotropic/ggxAnisotropic/sphereScale.
-#include "core/ltc/ltc_gpu.h"
+#include "nodes/shared/ltc_gpu.h"
 
 #include "core/ltc/ltc_tables.h"
 

@@ -1,5 +1,7 @@
 // The LTC tables as GPU resources (graph::ResourceSpec, kind BuiltinTable) for the GLSL of the LTC lobes
 // (nodes/shared/ltc.glsl): texel layouts, sampler state and the resource declarations the nodes share.
+// It lives with the nodes, not in core/ltc, because it speaks the graph's resource type: core/ltc sits below
+// core/graph (graph -> render -> ltc), and an ltc -> graph include would close a folder cycle (issue 36).
 #pragma once
 
 #include "core/graph/node_spec.h"
