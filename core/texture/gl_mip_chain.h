@@ -3,6 +3,7 @@
 #pragma once
 
 #include "core/math/math.h"
+#include "core/texture/pyramid.h"
 #include "core/texture/texture_store.h"
 
 #include <algorithm>
@@ -25,17 +26,14 @@ inline int anisotropicProbeCount(float pmax, float pmin, int maxAniso) {
 
 class GlMipChain {
 public:
-    struct Level {
-        int width = 0, height = 0;
-        std::vector<float> rgba;  // rows bottom-up (v = 0 is the bottom row, OpenGL convention)
-    };
-
-    // Level 0 from 'rgba' (width x height, rows bottom-up); each further level averages 2x2 texels of the one above
-    // (sizes max(1, n >> 1), GL's floor rule; an odd last row or column is averaged into its neighbour's texel).
+    // Level 0 from 'rgba' (width x height, rows bottom-up: v = 0 is the bottom row, OpenGL convention); each further
+    // level is GL's 2x2 box of the one above (PyramidReduction::GlBox: sizes max(1, n >> 1), an odd last row or
+    // column averaged into its neighbour's texel).
     static GlMipChain build(int width, int height, std::vector<float> rgba);
 
-    int levels() const { return int(levels_.size()); }
-    const Level& level(int l) const { return levels_[size_t(l)]; }
+    int levels() const { return pyramid_.levels(); }
+    // Level l's texels: 4 floats (RGBA) each.
+    const PyramidLevel& level(int l) const { return pyramid_.level(l); }
 
     // GL_LINEAR on level l at uv (texel centres at (i + 0.5) / n), the wrap applied to the texel indices.
     Vec4 bilinear(int l, Vec2 uv, TextureWrap wrap) const;
@@ -48,7 +46,7 @@ public:
     Vec4 anisotropic(Vec2 uv, Vec2 duvdx, Vec2 duvdy, TextureWrap wrap) const;
 
 private:
-    std::vector<Level> levels_;
+    Pyramid pyramid_;
 };
 
 }  // namespace specula

@@ -1,8 +1,9 @@
-// LEAN moment pyramids: per-texel slope moments, exact (fractional) box reduction in double precision,
+// LEAN moment pyramids: per-texel slope moments, the pyramid's exact (fractional) box reduction in double precision,
 // GL-equivalent bilinear/trilinear/anisotropic lookups (the GLSL of texture.lean performs the same steps).
 #include "core/texture/lean_moments.h"
 
 #include "core/texture/gl_mip_chain.h"
+#include "core/texture/pyramid.h"
 
 #include "core/texture/normal_map_gen.h"
 
@@ -42,73 +43,38 @@ LeanMoments leanTexelMoments(Vec3 n) {
     return {x, y, x * x, y * y, x * y};
 }
 
-int leanLevelSize(int size0, int level) { return std::max(1, size0 >> level); }
+int leanLevelSize(int size0, int level) { return pyramidLevelSize(size0, level); }
 
 namespace {
 
-// Exact 1D box reduction weights: output i covers [i * r, (i + 1) * r) input texels, r = nIn / nOut.
-// Returns (input index, weight) lists per output; weights sum to 1 per output and to nOut/nIn per input.
-std::vector<std::vector<std::pair<int, double>>> boxWeights(int nIn, int nOut) {
-    std::vector<std::vector<std::pair<int, double>>> w(static_cast<size_t>(nOut));
-    const double r = double(nIn) / double(nOut);
-    for (int i = 0; i < nOut; ++i) {
-        double a = i * r, b = (i + 1) * r;
-        for (int j = int(std::floor(a)); j < int(std::ceil(b)) && j < nIn; ++j) {
-            double ov = std::min(b, double(j + 1)) - std::max(a, double(j));
-            if (ov > 0) w[size_t(i)].push_back({j, ov / r});
-        }
-    }
-    return w;
-}
-
-inline int wrapIndex(int i, int n, LeanWrap wrap) {
-    if (wrap == LeanWrap::Clamp) return std::min(std::max(i, 0), n - 1);
-    int r = i % n;
-    return r < 0 ? r + n : r;
-}
+TextureWrap textureWrapOf(LeanWrap wrap) { return wrap == LeanWrap::Clamp ? TextureWrap::Clamp : TextureWrap::Repeat; }
 
 }  // namespace
 
 void LeanPyramid::build(std::vector<LeanMoments> base, int width, int height) {
     levels_.clear();
-    // Level 0 in double for the reduction chain (moments are averaged in double, stored in float).
-    int w = width, h = height;
-    std::vector<double> cur(size_t(w) * h * 5);
+    // Level 0 in double for the reduction chain (moments are averaged in double, stored in float): the pyramid's
+    // exact area reduction over the five moments (x~, y~, x~², y~², x~y~) of each texel.
+    std::vector<double> moments(base.size() * 5);
     for (size_t i = 0; i < base.size(); ++i) {
         const LeanMoments& m = base[i];
-        double* d = &cur[i * 5];
+        double* d = &moments[i * 5];
         d[0] = m.x, d[1] = m.y, d[2] = m.xx, d[3] = m.yy, d[4] = m.xy;
     }
-    auto store = [&](const std::vector<double>& v, int lw, int lh) {
+    const Pyramid pyramid = Pyramid::buildExact(width, height, 5, std::move(moments));
+    // Split each level into the GLSL samplers' layout: rgba = (x~, y~, x~², y~²), r = x~y~.
+    for (int l = 0; l < pyramid.levels(); ++l) {
+        const PyramidLevel& P = pyramid.level(l);
         LeanLevel L;
-        L.width = lw;
-        L.height = lh;
-        L.rgba.resize(size_t(lw) * lh * 4);
-        L.r.resize(size_t(lw) * lh);
-        for (size_t i = 0; i < size_t(lw) * lh; ++i) {
-            for (int k = 0; k < 4; ++k) L.rgba[i * 4 + size_t(k)] = float(v[i * 5 + size_t(k)]);
-            L.r[i] = float(v[i * 5 + 4]);
+        L.width = P.width;
+        L.height = P.height;
+        L.rgba.resize(size_t(P.width) * P.height * 4);
+        L.r.resize(size_t(P.width) * P.height);
+        for (size_t i = 0; i < size_t(P.width) * P.height; ++i) {
+            for (int k = 0; k < 4; ++k) L.rgba[i * 4 + size_t(k)] = P.texels[i * 5 + size_t(k)];
+            L.r[i] = P.texels[i * 5 + 4];
         }
         levels_.push_back(std::move(L));
-    };
-    store(cur, w, h);
-    while (w > 1 || h > 1) {
-        int nw = std::max(1, w / 2), nh = std::max(1, h / 2);
-        auto wx = boxWeights(w, nw), wy = boxWeights(h, nh);
-        // Rows first (x), then columns (y): separable box = exact area average of the 2D box.
-        std::vector<double> tmp(size_t(nw) * h * 5, 0.0);
-        for (int y = 0; y < h; ++y)
-            for (int i = 0; i < nw; ++i)
-                for (auto [j, wt] : wx[size_t(i)])
-                    for (int k = 0; k < 5; ++k) tmp[(size_t(y) * nw + i) * 5 + k] += wt * cur[(size_t(y) * w + j) * 5 + k];
-        std::vector<double> next(size_t(nw) * nh * 5, 0.0);
-        for (int i = 0; i < nh; ++i)
-            for (auto [j, wt] : wy[size_t(i)])
-                for (int x = 0; x < nw; ++x)
-                    for (int k = 0; k < 5; ++k) next[(size_t(i) * nw + x) * 5 + k] += wt * tmp[(size_t(j) * nw + x) * 5 + k];
-        cur.swap(next);
-        w = nw, h = nh;
-        store(cur, w, h);
     }
 }
 
@@ -155,8 +121,9 @@ LeanMoments LeanPyramid::bilinear(int l, Vec2 uv, LeanWrap wrap) const {
     float fs = std::floor(s), ft = std::floor(t);
     int i0 = int(fs), j0 = int(ft);
     float a = s - fs, b = t - ft;
-    int x0 = wrapIndex(i0, L.width, wrap), x1 = wrapIndex(i0 + 1, L.width, wrap);
-    int y0 = wrapIndex(j0, L.height, wrap), y1 = wrapIndex(j0 + 1, L.height, wrap);
+    const TextureWrap tw = textureWrapOf(wrap);
+    int x0 = wrapTexelIndex(i0, L.width, tw), x1 = wrapTexelIndex(i0 + 1, L.width, tw);
+    int y0 = wrapTexelIndex(j0, L.height, tw), y1 = wrapTexelIndex(j0 + 1, L.height, tw);
     LeanMoments m = texel(l, x0, y0) * ((1 - a) * (1 - b));
     m += texel(l, x1, y0) * (a * (1 - b));
     m += texel(l, x0, y1) * ((1 - a) * b);

@@ -23,7 +23,7 @@ GlMipChain randomChain(int w, int h, uint32_t seed) {
 
 Vec4 texel(const GlMipChain& c, int l, int x, int y) {
     const auto& L = c.level(l);
-    const float* p = &L.rgba[(size_t(y) * L.width + x) * 4];
+    const float* p = &L.texels[(size_t(y) * L.width + x) * 4];
     return {p[0], p[1], p[2], p[3]};
 }
 

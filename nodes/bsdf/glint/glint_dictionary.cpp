@@ -3,6 +3,7 @@
 #include "nodes/bsdf/glint/glint_dictionary.h"
 
 #include "core/render/sampler.h"
+#include "core/texture/pyramid.h"
 
 #include <tbb/parallel_for.h>
 
@@ -86,12 +87,10 @@ void generateMarginal(int d, float* out) {
         const double scale = sum > 0.0 ? 1.0 / (2.0 * kDelta * sum) : 0.0;
         float* row = out + size_t(k) * kRowFloats;
         for (int i = 0; i < kRes; ++i) row[i] = float(acc[i] * scale);
-        // Box MIP chain: level m+1 = 2:1 average of level m (keeps 2 Delta_m sum = 1 exactly in exact arithmetic).
-        for (int m = 1; m < kMips; ++m) {
-            const float* src = row + mipOffset(m - 1);
-            float* dst = row + mipOffset(m);
-            for (int i = 0; i < mipRes(m); ++i) dst[i] = float(0.5 * (double(src[2 * i]) + double(src[2 * i + 1])));
-        }
+        // Box MIP chain: level m+1 = 2:1 average of level m (keeps 2 Delta_m sum = 1 exactly in exact arithmetic), the
+        // pyramid's GL box on a 64 x 1 image (core/texture/pyramid.h), its levels packed behind MIP 0 in the row.
+        const Pyramid chain = Pyramid::build(kRes, 1, 1, std::vector<float>(row, row + kRes), PyramidReduction::GlBox);
+        for (int m = 1; m < kMips; ++m) std::copy_n(chain.level(m).texels.data(), mipRes(m), row + mipOffset(m));
     }
 }
 
