@@ -22,6 +22,8 @@ _results = []
 
 
 def enable_addon():
+    # The source add-on has no node_catalog.json (the build stages one): it asks this binary for the catalogue.
+    os.environ["SPECULA_BIN"] = SPECULA_BIN
     if not addon_utils.check("specula")[1]:
         sys.path.insert(0, os.path.join(ROOT, "plugin", "blender"))
         addon_utils.enable("specula", default_set=True, handle_error=None)

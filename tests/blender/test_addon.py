@@ -16,6 +16,7 @@ import numpy as np  # noqa: E402
 
 from blender_test_util import (COMBINED, OUT_DIR, SPECULA_BIN, check, enable_addon, finish,  # noqa: E402
                                read_exr, render_to)
+from catalog_checks import check_nodes_follow_catalog  # noqa: E402
 
 specula = enable_addon()
 engine_mod = specula.engine
@@ -77,6 +78,34 @@ for idname in ("SpeculaGlintBSDF", "SpeculaLeanBSDF", "SpeculaFilteredGGXBSDF", 
           cls is not None and cls.is_registered and "ShaderNodeCustomGroup" in [b.__name__ for b in cls.__mro__])
 check("export operator registered", hasattr(bpy.ops.export_scene, "specula"))
 check("Add > Specula menu", hasattr(bpy.types, "NODE_MT_specula_add"))
+
+# ---- 1b. the nodes are built from the C++ declarations (issue 36) ---------------------------------------------
+cli = subprocess.run([SPECULA_BIN, "nodes", "--json"], capture_output=True, text=True, check=True)
+n_checked = check_nodes_follow_catalog(specula, {n["id"]: n for n in json.loads(cli.stdout)["nodes"]}, check)
+check("the catalogue checks cover the Specula nodes' port sockets and settings", n_checked >= 20, str(n_checked))
+# Without a catalogue the nodes are not registered with ranges of their own: load_catalog says what is missing.
+nodes_mod, saved_file = specula.nodes, specula.nodes.CATALOG_FILE
+nodes_mod.CATALOG_FILE = os.path.join(OUT_DIR, "missing", "node_catalog.json")
+prefs().binary_path = os.path.join(OUT_DIR, "missing", "specula")
+try:
+    nodes_mod.load_catalog()
+    error = ""
+except RuntimeError as e:
+    error = str(e)
+check("no catalogue file and no binary: a clear error", nodes_mod.CATALOG_FILE in error and "missing" in error,
+      error)
+nodes_mod.CATALOG_FILE = os.path.join(OUT_DIR, "bad_node_catalog.json")
+with open(nodes_mod.CATALOG_FILE, "w") as f:
+    f.write("{\"not\": \"a catalogue\"}")
+try:
+    nodes_mod.load_catalog()
+    error = ""
+except RuntimeError as e:
+    error = str(e)
+check("a catalogue that is not `specula nodes --json`: a clear error", "is not `specula nodes --json`" in error,
+      error)
+nodes_mod.CATALOG_FILE = saved_file
+prefs().binary_path = SPECULA_BIN
 
 # ---- 2. exporter: meshes, instances, modifiers, camera, lights, world, Principled ---------------------------
 scene = fresh_scene()

@@ -1,6 +1,7 @@
 # The user's way in: Edit > Preferences > Add-ons > Install... with build/specula-blender-addon.zip, then enable it.
 # Run with BLENDER_USER_SCRIPTS pointing at an empty folder, so the user's own add-ons are not touched.
 #   blender -b --factory-startup --python-exit-code 1 --python test_install.py -- ZIP
+import json
 import os
 import sys
 
@@ -25,6 +26,14 @@ addon_utils.enable("specula", default_set=True, handle_error=None)
 check("the add-on enables", addon_utils.check("specula")[1])
 import specula  # noqa: E402
 check("it is the installed copy", os.path.dirname(specula.__file__) == os.path.dirname(installed), specula.__file__)
+# Its nodes come from the node_catalog.json packed with it (no binary is configured here).
+catalog_file = os.path.join(os.path.dirname(installed), "node_catalog.json")
+check("the zip carries the node catalogue", specula.nodes.CATALOG_FILE == catalog_file and os.path.isfile(catalog_file))
+with open(catalog_file) as f:
+    catalog = {n["id"]: n for n in json.load(f)["nodes"]}
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from catalog_checks import check_nodes_follow_catalog  # noqa: E402
+check("its nodes follow the catalogue", check_nodes_follow_catalog(specula, catalog, check) >= 20)
 check("bl_info names Blender 3.4", tuple(specula.bl_info["blender"]) == (3, 4, 0))
 check("the Specula engine is registered",
       "SPECULA" in {e.bl_idname for e in bpy.types.RenderEngine.__subclasses__()})

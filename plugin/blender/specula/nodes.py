@@ -5,9 +5,79 @@
 # Sockets are what can vary over the surface or be linked; settings are per-material constants of the Specula node
 # (enums, the normal-map source). Inputs bound to the geometry (uv, normal, tangent, footprints) are not exposed:
 # the renderer binds them, as for every Specula material.
+#
+# What a Specula port is (default, range, documentation, enum values) is read from the node catalogue that
+# libspecula declares (`specula nodes --json`, core/api/node_catalog.h), never restated here: this file only says
+# which ports Blender shows, under which name, and how the fallback and the export use them.
+import json
 import math
+import os
+import subprocess
 
 import bpy
+
+from . import preferences
+
+# ---------------------------------------------------------------------------------------------------------------
+# The node catalogue: written next to this file by the build and the install (CMakeLists.txt, blender-addon);
+# a source checkout asks the configured binary instead. Without either the add-on refuses to register its nodes
+# rather than show ranges of its own.
+
+CATALOG_FILE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "node_catalog.json")
+
+
+def load_catalog():
+    """{node id: node} of `specula nodes --json`. Raises RuntimeError saying what is missing."""
+    if os.path.isfile(CATALOG_FILE):
+        with open(CATALOG_FILE, encoding="utf-8") as f:
+            text, source = f.read(), CATALOG_FILE
+    else:
+        binary, message = preferences.locate_binary()
+        if binary is None:
+            raise RuntimeError("Specula node catalogue not found: %s is missing (the build and the install write "
+                               "it) and there is no binary to ask (%s)" % (CATALOG_FILE, message))
+        try:
+            p = subprocess.run([binary, "nodes", "--json"], capture_output=True, text=True, timeout=60)
+        except (OSError, subprocess.SubprocessError) as e:
+            raise RuntimeError("Specula node catalogue: `%s nodes --json` failed: %s" % (binary, e)) from e
+        if p.returncode != 0:
+            raise RuntimeError("Specula node catalogue: `%s nodes --json` failed: %s" % (binary, p.stderr.strip()))
+        text, source = p.stdout, "`%s nodes --json`" % binary
+    try:
+        return {n["id"]: n for n in json.loads(text)["nodes"]}
+    except (ValueError, KeyError, TypeError) as e:
+        raise RuntimeError("Specula node catalogue %s is not `specula nodes --json` output (%s)" % (source, e)) from e
+
+
+def catalog_port(catalog, node_id, port_name):
+    """The declaration of input `port_name` of Specula node `node_id`."""
+    if node_id not in catalog:
+        raise RuntimeError("Specula node catalogue has no node %s (add-on and binary out of step?)" % node_id)
+    for port in catalog[node_id]["inputs"]:
+        if port["name"] == port_name:
+            return port
+    raise RuntimeError("Specula node %s has no input %s (add-on and binary out of step?)" % (node_id, port_name))
+
+
+# Port names and enum values are shown title-cased ("log_density" -> "Log Density"), these words as they are written.
+_WORDS = {"ggx": "GGX", "opengl": "OpenGL", "directx": "DirectX", "uv": "UV"}
+
+
+def title(name):
+    return " ".join(_WORDS.get(w, w.capitalize()) for w in name.split("_"))
+
+
+def port_setting(catalog, node_id, port_name, name):
+    """A per-material setting for a string port: a checkbox for an on/off switch, else a menu of its values, with
+    the declared default and the port's documentation as tooltip."""
+    port = catalog_port(catalog, node_id, port_name)
+    if not port.get("enum"):
+        raise RuntimeError("Specula node %s input %s has no enum values to offer" % (node_id, port_name))
+    if sorted(port["enum"]) == ["off", "on"]:
+        return bpy.props.BoolProperty(name=name, description=port["doc"], default=port["default"] == "on")
+    items = [(v, title(v), port["doc"]) for v in port["enum"]]
+    return bpy.props.EnumProperty(name=name, description=port["doc"], items=items, default=port["default"])
+
 
 # ---------------------------------------------------------------------------------------------------------------
 # Normal-map source, shared by the LEAN, P-NDF and glint nodes: a Blender image (also used by the fallback's Normal
@@ -24,7 +94,8 @@ def _refresh_fallback(self, context):
     _sync_fallback_normal_map(self)
 
 
-def normal_map_settings():
+def normal_map_settings(nodedef, catalog, node_id):
+    """The normal-map source settings; `convention` is input `convention` of Specula node `node_id`."""
     return {
         "map_source": bpy.props.EnumProperty(
             name="Normal Map",
@@ -36,11 +107,7 @@ def normal_map_settings():
         "generated_size": bpy.props.IntProperty(name="Size", description="Texels per side (power of two)",
                                                 default=512, min=16, max=8192),
         "generated_seed": bpy.props.IntProperty(name="Seed", default=1, min=0, max=2147483647),
-        "convention": bpy.props.EnumProperty(
-            name="Convention",
-            items=[("opengl", "OpenGL (+Y up)", "Green channel points up, as Blender's Normal Map node"),
-                   ("directx", "DirectX (+Y down)", "Green channel points down")],
-            default="opengl"),
+        **nodedef.port_settings(catalog, convention=(node_id, "convention", "Convention")),
     }
 
 
@@ -80,6 +147,7 @@ def _new_tree(node, nodedef):
     tree = bpy.data.node_groups.new("." + nodedef.bl_idname, "ShaderNodeTree")
     for s in nodedef.sockets:
         sock = tree.inputs.new(s.socket_type, s.name)
+        sock.description = socket_tooltip(s.doc)
         if s.socket_type == "NodeSocketColor":
             sock.default_value = tuple(s.default) + (1.0,)
         else:
@@ -134,18 +202,58 @@ def _sync_fallback_normal_map(node):
         tree.links.new(normal_map.outputs["Normal"], normal_in)
 
 
+# Blender's float range: the bound of a socket whose port declares no hard limit on that side.
+FLOAT_MAX = 3.4028234663852886e38
+# A socket's tooltip holds 63 bytes (bNodeSocket::description); a longer doc is cut at a word, with "...".
+TOOLTIP_BYTES = 63
+
+
+def socket_tooltip(doc):
+    if len(doc.encode()) <= TOOLTIP_BYTES:
+        return doc
+    cut = doc.encode()[:TOOLTIP_BYTES - 3].decode(errors="ignore")
+    return cut[:cut.rfind(" ")] + "..." if " " in cut else cut + "..."
+
+
 class Socket:
-    def __init__(self, name, socket_type, default, lo=0.0, hi=1.0, doc=""):
+    """A node input shown as a Blender socket: `name` is its label, `socket_type` a NodeSocket type, `min`/`max`
+    the range Blender clamps it to (float sockets) and `doc` its tooltip."""
+
+    def __init__(self, name, socket_type, default, lo, hi, doc):
         self.name, self.socket_type, self.default, self.min, self.max, self.doc = \
             name, socket_type, default, lo, hi, doc
 
 
-def color(name, default, doc=""):
-    return Socket(name, "NodeSocketColor", default, doc=doc)
+class PortSocket:
+    """A socket that sets input `port` of Specula node `node_id`: default, hard range and tooltip are the port's.
+    `host_default` replaces the declared default where Blender starts a new node elsewhere (say why)."""
+
+    def __init__(self, name, node_id, port, host_default=None):
+        self.name, self.node_id, self.port, self.host_default = name, node_id, port, host_default
+
+    def resolve(self, catalog):
+        port = catalog_port(catalog, self.node_id, self.port)
+        default = self.host_default if self.host_default is not None else port["default"]
+        if port["type"] == "color3":
+            return Socket(self.name, "NodeSocketColor", tuple(default), None, None, port["doc"])
+        if port["type"] != "float":
+            raise RuntimeError("Specula node %s input %s is a %s, not a float or color3 socket"
+                               % (self.node_id, self.port, port["type"]))
+        lo = port["hard_min"] if port["hard_min"] is not None else -FLOAT_MAX
+        hi = port["hard_max"] if port["hard_max"] is not None else FLOAT_MAX
+        return Socket(self.name, "NodeSocketFloat", default, lo, hi, port["doc"])
 
 
-def factor(name, default, lo=0.0, hi=1.0, doc=""):
-    return Socket(name, "NodeSocketFloat", default, lo, hi, doc)
+def port_sockets(node_id, *ports):
+    """Sockets named after the ports they set (title())."""
+    return tuple(PortSocket(title(port), node_id, port) for port in ports)
+
+
+class HostSocket(Socket):
+    """A socket of Blender's own parameterisation, converted by the node's export (no port of its own)."""
+
+    def resolve(self, catalog):
+        return self
 
 
 # Blender roughness r <-> Specula/GGX alpha = r^2; a Gaussian slope std sigma has GGX-equivalent alpha = sqrt(2) sigma.
@@ -168,23 +276,41 @@ def _link_roughness_from_sigma(tree, gin, bsdf, sigma_sockets):
 # ---------------------------------------------------------------------------------------------------------------
 # The node declarations.
 
+# A new LEAN or filtered GGX node starts as a bright metal, not as the port's dielectric F0 of 0.04: the fallback
+# Glossy BSDF takes the colour as its reflectance at every angle, so only a metal looks alike in both renderers.
+METAL_F0 = (0.9, 0.9, 0.9)
+
 class NodeDef:
     bl_idname = ""
     label = ""
-    description = ""
-    sockets = ()
-    settings = {}
+    specula_nodes = ()        # the Specula nodes it exports; the first one's documentation is the node's tooltip
+    socket_decls = ()         # PortSocket / HostSocket, in socket order
     fallback_bsdf = "ShaderNodeBsdfGlossy"
     fallback_distribution = "GGX"
     has_normal_map = False
+
+    def bind(self, catalog):
+        """Reads the declarations: sockets, settings and description (at register time)."""
+        self.sockets = [s.resolve(catalog) for s in self.socket_decls]
+        self.setting_ports = {}   # setting key -> (Specula node id, port) it sets
+        self.settings = self.make_settings(catalog)
+        self.description = "%s (Specula node %s)" % (catalog[self.specula_nodes[0]]["doc"],
+                                                     " + ".join(self.specula_nodes))
+
+    def make_settings(self, catalog):
+        return {}
+
+    def port_settings(self, catalog, **settings):
+        """{key: setting} of port_setting(node id, port, label), noting each key's port in self.setting_ports."""
+        self.setting_ports.update({key: (node_id, port) for key, (node_id, port, _) in settings.items()})
+        return {key: port_setting(catalog, node_id, port, label) for key, (node_id, port, label) in settings.items()}
 
     def build_fallback(self, tree, gin, bsdf):
         tree.links.new(gin.outputs["Color"], bsdf.inputs["Color"])
 
     def draw(self, node, layout):
         for name in self.settings:
-            if name not in normal_map_settings():
-                layout.prop(node, name)
+            layout.prop(node, name)
 
     def export(self, node, t):
         raise NotImplementedError
@@ -193,25 +319,20 @@ class NodeDef:
 class GlintDef(NodeDef):
     bl_idname = "SpeculaGlintBSDF"
     label = "Specula Glint BSDF"
-    description = ("Procedural glints (Chermain et al. 2020) with geometric glint anti-aliasing and slope "
-                   "correlation (2021); optionally over a LEAN-filtered normal map. Specula node bsdf.glint")
-    sockets = (color("Color", (1.0, 1.0, 1.0), "Schlick F0"),
-               factor("Sigma X", 0.16, 0.0, 1.0, "RMS slope along the tangent"),
-               factor("Sigma Y", 0.16, 0.0, 1.0, "RMS slope along the bitangent"),
-               factor("Correlation", 0.0, -0.99, 0.99, "slope correlation rho"),
-               factor("Log Density", 15.0, 0.0, 40.0, "ln(microfacets per unit UV area)"),
-               factor("Relative Area", 1.0, 0.0, 1.0, "probability that a cell holds microfacets"),
-               factor("Density Jitter", 2.0, 0.0, 100.0, "std of the per-cell LOD jitter"),
-               factor("UV Scale", 1.0, 0.001, 1000.0, "tiling of the glint grid and the map"))
-    settings = dict(
-        ggaa=bpy.props.BoolProperty(name="GGAA", description="Geometric glint anti-aliasing (Chermain 2021)",
-                                    default=True),
-        use_lean=bpy.props.BoolProperty(name="LEAN Normal Map",
-                                        description="Glints over a LEAN-filtered normal map", default=False,
-                                        update=_refresh_fallback),
-        **normal_map_settings())
+    specula_nodes = ("bsdf.glint", "texture.lean")
+    socket_decls = (PortSocket("Color", "bsdf.glint", "f0"),
+                    *port_sockets("bsdf.glint", "sigma_x", "sigma_y"),
+                    PortSocket("Correlation", "bsdf.glint", "rho"),
+                    *port_sockets("bsdf.glint", "log_density", "relative_area", "density_jitter", "uv_scale"))
     fallback_bsdf = "ShaderNodeBsdfAnisotropic"
     has_normal_map = True
+
+    def make_settings(self, catalog):
+        return dict(**self.port_settings(catalog, ggaa=("bsdf.glint", "ggaa", "GGAA")),
+                    use_lean=bpy.props.BoolProperty(name="LEAN Normal Map",
+                                                    description="Glints over a LEAN-filtered normal map",
+                                                    default=False, update=_refresh_fallback),
+                    **normal_map_settings(self, catalog, "texture.lean"))
 
     def build_fallback(self, tree, gin, bsdf):
         super().build_fallback(tree, gin, bsdf)
@@ -241,21 +362,16 @@ class GlintDef(NodeDef):
 class LeanDef(NodeDef):
     bl_idname = "SpeculaLeanBSDF"
     label = "Specula LEAN BSDF"
-    description = ("Normal-mapped specular filtered by LEAN mapping (Olano & Baker 2010): Beckmann over the "
-                   "footprint's slope moments. Specula nodes texture.lean + bsdf.beckmann_lean")
-    sockets = (color("Color", (0.9, 0.9, 0.9), "Schlick F0"),
-               factor("Roughness", 0.3, 0.0, 1.0, "material roughness, Beckmann alpha = roughness^2"),
-               factor("Strength", 1.0, 0.0, 1000.0, "scales the map's slopes"),
-               factor("UV Scale", 1.0, 0.001, 1000.0, "tiling of the map"))
-    settings = dict(
-        lean_filter=bpy.props.EnumProperty(
-            name="Filter", items=[("anisotropic", "Anisotropic", "Probes along the footprint's major axis"),
-                                  ("trilinear", "Trilinear", "Isotropic trilinear"),
-                                  ("none", "None", "Full-resolution level (the reference)")],
-            default="anisotropic"),
-        **normal_map_settings())
+    specula_nodes = ("bsdf.beckmann_lean", "texture.lean")
+    socket_decls = (PortSocket("Color", "bsdf.beckmann_lean", "f0", host_default=METAL_F0),
+                    *port_sockets("bsdf.beckmann_lean", "roughness"),
+                    *port_sockets("texture.lean", "strength", "uv_scale"))
     fallback_distribution = "BECKMANN"
     has_normal_map = True
+
+    def make_settings(self, catalog):
+        return dict(**self.port_settings(catalog, lean_filter=("texture.lean", "filter", "Filter")),
+                    **normal_map_settings(self, catalog, "texture.lean"))
 
     def build_fallback(self, tree, gin, bsdf):
         super().build_fallback(tree, gin, bsdf)
@@ -277,30 +393,20 @@ class LeanDef(NodeDef):
             "f0": t.value(node, "Color", "color3")}, node)
 
 
-FILTERS = [("projected_approx", "Projected (approx.)", "Tokuyoshi & Kaplanyan 2021, Eq. 9"),
-           ("projected", "Projected", "Tokuyoshi & Kaplanyan 2021, exact projected-space filter"),
-           ("slope", "Slope Space", "Kaplanyan et al. 2016"),
-           ("iso_max", "Isotropic (max)", "isotropic filter, largest axis"),
-           ("iso_sum", "Isotropic (sum)", "isotropic filter, sum"),
-           ("iso_mean", "Isotropic (mean)", "isotropic filter, mean"),
-           ("iso_rect", "Isotropic (rect)", "isotropic filter, bounding rectangle"),
-           ("none", "None", "Unfiltered GGX")]
-
-
 class FilteredGgxDef(NodeDef):
     bl_idname = "SpeculaFilteredGGXBSDF"
     label = "Specula Filtered GGX"
-    description = ("GGX whose roughness widens with the pixel footprint's normal variation, against specular "
-                   "aliasing (Tokuyoshi & Kaplanyan 2021, Kaplanyan et al. 2016). Specula node bsdf.ggx_filtered")
-    sockets = (color("Color", (0.9, 0.9, 0.9), "Schlick F0"),
-               factor("Roughness", 0.2, 0.0, 1.0, "roughness, alpha = roughness^2"),
-               factor("Anisotropy", 0.0, 0.0, 1.0, "stretches alpha along the tangent, as Principled"))
-    settings = dict(
-        ndf_filter=bpy.props.EnumProperty(name="Filter", items=FILTERS, default="projected_approx"),
-        kernel=bpy.props.EnumProperty(name="Kernel", items=[("axis_aligned", "Axis-Aligned", "κ-clamped rectangle"),
-                                                            ("full", "Full", "full covariance")],
-                                      default="axis_aligned"))
+    specula_nodes = ("bsdf.ggx_filtered",)
+    # Roughness and Anisotropy are Blender's (Principled) parameterisation of the port alpha, converted in export.
+    socket_decls = (PortSocket("Color", "bsdf.ggx_filtered", "f0", host_default=METAL_F0),
+                    HostSocket("Roughness", "NodeSocketFloat", 0.2, 0.0, 1.0, "roughness, alpha = roughness^2"),
+                    HostSocket("Anisotropy", "NodeSocketFloat", 0.0, 0.0, 1.0,
+                               "stretches alpha along the tangent, as Principled"))
     fallback_bsdf = "ShaderNodeBsdfAnisotropic"
+
+    def make_settings(self, catalog):
+        return self.port_settings(catalog, ndf_filter=("bsdf.ggx_filtered", "filter", "Filter"),
+                                  kernel=("bsdf.ggx_filtered", "kernel", "Kernel"))
 
     def build_fallback(self, tree, gin, bsdf):
         super().build_fallback(tree, gin, bsdf)
@@ -323,20 +429,15 @@ class FilteredGgxDef(NodeDef):
 class PndfDef(NodeDef):
     bl_idname = "SpeculaPndfBSDF"
     label = "Specula P-NDF Glints"
-    description = ("Glints of an explicit high-resolution normal map: the exact position-normal NDF of the pixel "
-                   "footprint (Wu et al. 2024). Specula node bsdf.glint_pndf (CPU only)")
-    sockets = (color("Color", (0.95, 0.95, 0.95), "Schlick F0"),
-               factor("UV Scale", 1.0, 0.001, 1000.0, "the map repeats this many times per uv unit"),
-               factor("Footprint Scale", 2.0, 0.001, 1000.0, "kernel half-width in pixel steps x 2"))
-    settings = dict(
-        kernel=bpy.props.EnumProperty(name="Kernel", items=[("gaussian", "Gaussian", ""), ("box", "Box", ""),
-                                                            ("disk", "Disk", "")], default="gaussian"),
-        masking=bpy.props.EnumProperty(name="Masking",
-                                       items=[("ggx_fit", "GGX Fit", "per-texel GGX fit of the projected area"),
-                                              ("analytic", "Analytic", "exact projected area of the footprint")],
-                                       default="ggx_fit"),
-        **normal_map_settings())
+    specula_nodes = ("bsdf.glint_pndf",)
+    socket_decls = (PortSocket("Color", "bsdf.glint_pndf", "f0"),
+                    *port_sockets("bsdf.glint_pndf", "uv_scale", "footprint_scale"))
     has_normal_map = True
+
+    def make_settings(self, catalog):
+        return dict(**self.port_settings(catalog, kernel=("bsdf.glint_pndf", "kernel", "Kernel"),
+                                         masking=("bsdf.glint_pndf", "masking", "Masking")),
+                    **normal_map_settings(self, catalog, "bsdf.glint_pndf"))
 
     def build_fallback(self, tree, gin, bsdf):
         super().build_fallback(tree, gin, bsdf)
@@ -406,6 +507,9 @@ class NODE_MT_specula_add(bpy.types.Menu):
 
 
 def register():
+    catalog = load_catalog()
+    for d in NODE_DEFS.values():
+        d.bind(catalog)
     _classes[:] = [_make_class(d) for d in NODE_DEFS.values()]
     for c in _classes:
         bpy.utils.register_class(c)
