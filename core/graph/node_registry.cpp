@@ -1,8 +1,6 @@
 // NodeRegistry, NodeSpec helpers and the geometric default bindings.
 #include "core/graph/node_spec.h"
 
-#include "core/codegen/glsl_signature.h"
-#include "core/codegen/glsl_sources.h"
 #include "core/render/shading.h"
 
 #include <mutex>
@@ -146,22 +144,6 @@ std::vector<std::string> NodeSpec::outputNames() const {
     std::vector<std::string> r;
     for (auto& p : outputs) r.push_back(p.name);
     return r;
-}
-
-const std::string* NodeSpec::glslSource() const { return codegen::embeddedGlsl(glslFile); }
-
-std::string NodeSpec::glslPrototype() const {
-    try {
-        codegen::GlslNodeBinding b = codegen::bindGlslFunction(*this);
-        std::string r = "void " + glslFunction + "(";
-        for (size_t i = 0; i < b.prototype.params.size(); ++i) {
-            const codegen::GlslParam& p = b.prototype.params[i];
-            r += (i ? ", " : "") + std::string(p.out ? "out " : "") + p.type + " " + p.name;
-        }
-        return r + ")";
-    } catch (const std::exception& e) {
-        return std::string("(unbound: ") + e.what() + ")";
-    }
 }
 
 NodeRegistry& NodeRegistry::instance() {
