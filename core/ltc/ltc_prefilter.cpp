@@ -2,6 +2,8 @@
 // fp16 storage, the trilinear/bilinear runtime lookup and the validated, atomically written disk cache.
 #include "core/ltc/ltc_prefilter.h"
 
+#include "core/util/cache_dir.h"
+
 #include "core/ltc/ltc_fit.h"
 #include "core/ltc/ltc_tables.h"
 #include "core/render/lobes/ggx.h"
@@ -538,9 +540,10 @@ LtcPair NormalMapLtcPrefilter::lookup(Vec2 uv, Vec2 duvdx, Vec2 duvdy, const Vec
 
 namespace {
 
-// Fixed-size little-endian header of a cache file; every field is checked on read against what the parameters imply.
-struct FileHeader {
-    char magic[8];
+// The request a cache file answers, at the start of its payload (an entry of the cache service, core/util/cache_dir.h,
+// whose header holds the format tag, the size and the content checksum); every field is checked on read against what
+// the parameters imply. No padding: the file's bytes are a function of its content.
+struct RequestHeader {
     uint32_t version;
     uint32_t size;
     uint32_t levels;
@@ -548,16 +551,16 @@ struct FileHeader {
     uint32_t maxSamples, iterations;
     uint32_t recordHalfs;
     float alpha;
+    uint32_t reserved;
     uint64_t hash;
     uint64_t specCount, diffCount;  // uint16 values in each payload
-    uint64_t payloadHash;           // FNV-1a 64 of both payloads
 };
-static_assert(sizeof(FileHeader) == 88, "cache header layout");
-constexpr char kMagic[8] = {'S', 'P', 'C', 'L', 'T', 'C', 'P', 'F'};
+static_assert(sizeof(RequestHeader) == 72, "cache header layout");
 
-FileHeader expectedHeader(const NormalMapLtcPrefilter& p) {
-    FileHeader h{};
-    std::memcpy(h.magic, kMagic, 8);
+std::string cacheTag() { return "ltc-prefilter " + std::to_string(NormalMapLtcPrefilter::kFormatVersion); }
+
+RequestHeader expectedHeader(const NormalMapLtcPrefilter& p) {
+    RequestHeader h{};
     const PrefilterSettings& s = p.settings();
     h.version = NormalMapLtcPrefilter::kFormatVersion;
     h.size = uint32_t(p.size());
@@ -567,6 +570,7 @@ FileHeader expectedHeader(const NormalMapLtcPrefilter& p) {
     h.maxSamples = uint32_t(s.maxSamples), h.iterations = uint32_t(s.iterations);
     h.recordHalfs = NormalMapLtcPrefilter::kRecordHalfs;
     h.alpha = s.alpha;
+    h.reserved = 0;
     h.hash = p.hash();
     return h;
 }
@@ -587,38 +591,13 @@ std::string NormalMapLtcPrefilter::cachePath(const std::string& dir, uint64_t ha
 }
 
 bool NormalMapLtcPrefilter::writeFile(const std::string& path) const {
-    FileHeader h = expectedHeader(*this);
+    RequestHeader h = expectedHeader(*this);
     h.specCount = spec_.size();
     h.diffCount = diffuse_.size();
-    Fnv f;
-    f.add(spec_.data(), spec_.size() * sizeof(uint16_t));
-    f.add(diffuse_.data(), diffuse_.size() * sizeof(uint16_t));
-    h.payloadHash = f.h;
-    // Atomic publish: a unique temporary in the same directory, then rename (readers see the old file or the new one,
-    // never a partial one; concurrent writers of the same content just replace each other).
-    static std::atomic<unsigned> counter{0};
-    const std::string tmp = path + ".tmp." + std::to_string(getpid()) + "." + std::to_string(counter++);
-    {
-        std::ofstream o(tmp, std::ios::binary | std::ios::trunc);
-        if (!o) return false;
-        o.write(reinterpret_cast<const char*>(&h), sizeof h);
-        o.write(reinterpret_cast<const char*>(spec_.data()), std::streamsize(spec_.size() * sizeof(uint16_t)));
-        o.write(reinterpret_cast<const char*>(diffuse_.data()), std::streamsize(diffuse_.size() * sizeof(uint16_t)));
-        o.flush();
-        if (!o) {
-            o.close();
-            std::error_code ec;
-            fs::remove(tmp, ec);
-            return false;
-        }
-    }
-    std::error_code ec;
-    fs::rename(tmp, path, ec);
-    if (ec) {
-        fs::remove(tmp, ec);
-        return false;
-    }
-    return true;
+    return writeCacheEntry(path, cacheTag(),
+                           {{&h, sizeof h},
+                            {spec_.data(), spec_.size() * sizeof(uint16_t)},
+                            {diffuse_.data(), diffuse_.size() * sizeof(uint16_t)}});
 }
 
 bool NormalMapLtcPrefilter::readFile(const std::string& path, const std::vector<Vec3>& normals, int size,
@@ -629,33 +608,33 @@ bool NormalMapLtcPrefilter::readFile(const std::string& path, const std::vector<
     } catch (const PrefilterError&) {
         return false;
     }
-    const FileHeader want = expectedHeader(p);
+    const RequestHeader want = expectedHeader(p);
     const uint64_t specCount = p.texelCount() * uint64_t(s.specTheta * s.specPhi) * kRecordHalfs;
     const uint64_t diffCount = p.texelCount() * uint64_t(s.diffTheta * s.diffPhi) * kRecordHalfs;
-    std::error_code ec;
-    const auto bytes = fs::file_size(path, ec);
     // The size is fixed by the parameters: anything else (truncated, padded, another layout) is rejected before
     // any allocation from file data.
-    if (ec || bytes != sizeof(FileHeader) + (specCount + diffCount) * sizeof(uint16_t)) return false;
-    std::ifstream in(path, std::ios::binary);
-    if (!in) return false;
-    FileHeader h{};
-    if (!in.read(reinterpret_cast<char*>(&h), sizeof h)) return false;
-    if (std::memcmp(h.magic, want.magic, 8) != 0 || h.version != want.version || h.size != want.size ||
-        h.levels != want.levels || h.specTheta != want.specTheta || h.specPhi != want.specPhi ||
-        h.diffTheta != want.diffTheta || h.diffPhi != want.diffPhi || h.maxSamples != want.maxSamples ||
-        h.iterations != want.iterations || h.recordHalfs != want.recordHalfs ||
-        std::memcmp(&h.alpha, &want.alpha, sizeof(float)) != 0 || h.hash != want.hash || h.specCount != specCount ||
-        h.diffCount != diffCount)
+    const uint64_t bytes = sizeof(RequestHeader) + (specCount + diffCount) * sizeof(uint16_t);
+    std::vector<uint8_t> payload;
+    if (readCacheEntry(path, cacheTag(), bytes, payload) != CacheLookup::Hit) return false;
+    RequestHeader h{};
+    if (payload.size() != bytes) {
+        warnCorruptCacheEntry(path, "has the wrong size for its settings");
         return false;
+    }
+    std::memcpy(&h, payload.data(), sizeof h);
+    if (h.version != want.version || h.size != want.size || h.levels != want.levels || h.specTheta != want.specTheta ||
+        h.specPhi != want.specPhi || h.diffTheta != want.diffTheta || h.diffPhi != want.diffPhi ||
+        h.maxSamples != want.maxSamples || h.iterations != want.iterations || h.recordHalfs != want.recordHalfs ||
+        std::memcmp(&h.alpha, &want.alpha, sizeof(float)) != 0 || h.hash != want.hash || h.specCount != specCount ||
+        h.diffCount != diffCount) {
+        warnCorruptCacheEntry(path, "answers other settings or another normal map");
+        return false;
+    }
     p.spec_.resize(size_t(specCount));
     p.diffuse_.resize(size_t(diffCount));
-    if (!in.read(reinterpret_cast<char*>(p.spec_.data()), std::streamsize(specCount * sizeof(uint16_t)))) return false;
-    if (!in.read(reinterpret_cast<char*>(p.diffuse_.data()), std::streamsize(diffCount * sizeof(uint16_t)))) return false;
-    Fnv f;
-    f.add(p.spec_.data(), p.spec_.size() * sizeof(uint16_t));
-    f.add(p.diffuse_.data(), p.diffuse_.size() * sizeof(uint16_t));
-    if (f.h != h.payloadHash) return false;
+    std::memcpy(p.spec_.data(), payload.data() + sizeof h, size_t(specCount) * sizeof(uint16_t));
+    std::memcpy(p.diffuse_.data(), payload.data() + sizeof h + size_t(specCount) * sizeof(uint16_t),
+                size_t(diffCount) * sizeof(uint16_t));
     *this = std::move(p);
     return true;
 }

@@ -130,7 +130,7 @@ public:
     static Mat3 texelRotation(const Vec3& n);
 
     static constexpr int kRecordHalfs = 11;  // inv(M) 9, magnitude, Fresnel
-    static constexpr uint32_t kFormatVersion = 1;
+    static constexpr uint32_t kFormatVersion = 2;  // 2: an entry of the cache service (core/util/cache_dir.h)
 
 private:
     int size_ = 0, levels_ = 0;

@@ -35,8 +35,8 @@ std::string lowerExtension(const std::string& path) {
 Vec3 zUp(const glm::dvec3& p) { return Vec3(float(p.x), float(-p.z), float(p.y)); }
 nlohmann::json vec(const Vec3& v) { return {v.x, v.y, v.z}; }
 
-// Images are named by their content (FNV-1a 64), so the same file imported twice reuses them; written to a temporary
-// and renamed, so a reader never sees half an image.
+// Images are named by their content (FNV-1a 64), so the same file imported twice reuses them; written by the cache
+// service (core/util/cache_dir.h: temporary and rename), so a reader never sees half an image.
 std::string saveImage(const std::vector<unsigned char>& bytes, const std::string& ext) {
     uint64_t h = 1469598103934665603ull;
     for (unsigned char b : bytes) h = (h ^ b) * 1099511628211ull;
@@ -45,21 +45,17 @@ std::string saveImage(const std::vector<unsigned char>& bytes, const std::string
     const fs::path dir = cacheFolder("gltf-images"), file = dir / (std::string(name) + ext);
     std::error_code ec;
     // Reused only when every byte agrees: a corrupted file of the right size was used before (issue 35).
-    if (fs::exists(file, ec) && fs::file_size(file, ec) == bytes.size()) {
-        std::ifstream in(file, std::ios::binary);
-        std::vector<unsigned char> held(bytes.size());
-        if (in.read(reinterpret_cast<char*>(held.data()), std::streamsize(held.size())) && held == bytes)
-            return file.string();
+    if (fs::exists(file, ec)) {
+        if (fs::file_size(file, ec) == bytes.size()) {
+            std::ifstream in(file, std::ios::binary);
+            std::vector<unsigned char> held(bytes.size());
+            if (in.read(reinterpret_cast<char*>(held.data()), std::streamsize(held.size())) && held == bytes)
+                return file.string();
+        }
+        warnCorruptCacheEntry(file.string(), "differs from the image its name hashes");
     }
-    static std::atomic<unsigned> serial{0};
-    const fs::path tmp = dir / (std::string(name) + ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(serial++) + ext);
-    {
-        std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-        out.write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
-        if (!out) throw IoError("cannot write the glTF image '" + tmp.string() + "'");
-    }
-    fs::rename(tmp, file, ec);
-    if (ec) throw IoError("cannot write the glTF image '" + file.string() + "': " + ec.message());
+    if (!writeFileAtomically(file.string(), {{bytes.data(), bytes.size()}}))
+        throw IoError("cannot write the glTF image '" + file.string() + "'");
     return file.string();
 }
 

@@ -355,7 +355,12 @@ TextureHandle TextureStore::load(const std::string& path, const std::string& col
     // OpenImageIO reads a corrupted or truncated .tx, or a valid one of other content, without complaint and
     // samples wrong texels (issue 35). Anything else is rebuilt from the pixels in memory, like the LTC and P-NDF
     // caches refit on a bad checksum.
-    if (!fs::is_regular_file(e->cachePath, ec) || !cacheChecksumMatches(e->cachePath)) makeTx();
+    if (!fs::is_regular_file(e->cachePath, ec)) {
+        makeTx();
+    } else if (!cacheChecksumMatches(e->cachePath)) {
+        warnCorruptCacheEntry(e->cachePath, "fails its checksum sidecar");
+        makeTx();
+    }
     if (!openHandle()) {
         // A file replaced between the check and the open: rebuild it once more.
         makeTx();

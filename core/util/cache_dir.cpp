@@ -118,26 +118,8 @@ std::string cacheChecksumPath(const std::string& file) { return file + ".sum"; }
 bool writeCacheChecksum(const std::string& file) {
     uint64_t size = 0, sum = 0;
     if (!checksumFile(file, size, sum)) return false;
-    static std::atomic<unsigned> serial{0};
-    const std::string side = cacheChecksumPath(file);
-    const std::string tmp = side + ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(serial++);
-    {
-        std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-        out << sidecarLine(size, sum);
-        out.flush();
-        if (!out) {
-            std::error_code ec;
-            fs::remove(tmp, ec);
-            return false;
-        }
-    }
-    std::error_code ec;
-    fs::rename(tmp, side, ec);
-    if (ec) {
-        fs::remove(tmp, ec);
-        return false;
-    }
-    return true;
+    const std::string line = sidecarLine(size, sum);
+    return writeFileAtomically(cacheChecksumPath(file), {{line.data(), line.size()}});
 }
 
 bool cacheChecksumMatches(const std::string& file) {
@@ -158,6 +140,90 @@ bool cacheChecksumMatches(const std::string& file) {
     uint64_t size = 0, sum = 0;
     if (!checksumFile(file, size, sum)) return false;
     return recorded == sidecarLine(size, sum);
+}
+
+// ---- the cache service ------------------------------------------------------------------------------------------
+
+bool writeFileAtomically(const std::string& path, const std::vector<CachePiece>& pieces) {
+    std::error_code ec;
+    const fs::path parent = fs::path(path).parent_path();
+    if (!parent.empty()) {
+        fs::create_directories(parent, ec);
+        if (!fs::is_directory(parent, ec)) return false;
+    }
+    static std::atomic<unsigned> serial{0};
+    const std::string tmp = path + ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(serial++);
+    bool ok = false;
+    {
+        std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+        if (out) {
+            for (const CachePiece& p : pieces) out.write(static_cast<const char*>(p.data), std::streamsize(p.bytes));
+            out.flush();
+            ok = bool(out);
+        }
+    }
+    if (ok) {
+        fs::rename(tmp, path, ec);
+        ok = !ec;
+    }
+    if (!ok) fs::remove(tmp, ec);
+    return ok;
+}
+
+namespace {
+
+constexpr char kEntryMagic[8] = {'S', 'P', 'C', 'A', 'C', 'H', 'E', '1'};
+constexpr size_t kEntryHeader = 32;
+
+}  // namespace
+
+void warnCorruptCacheEntry(const std::string& path, const std::string& why) {
+    std::fprintf(stderr, "specula: warning: cache file '%s' %s; rebuilding it\n", path.c_str(), why.c_str());
+}
+
+CacheLookup readCacheEntry(const std::string& path, const std::string& tag, uint64_t maxPayload,
+                           std::vector<uint8_t>& payload) {
+    std::error_code ec;
+    if (!fs::exists(path, ec)) return CacheLookup::Missing;
+    auto corrupt = [&](const std::string& why) {
+        warnCorruptCacheEntry(path, why);
+        return CacheLookup::Corrupt;
+    };
+    const uint64_t fileSize = fs::is_regular_file(path, ec) ? uint64_t(fs::file_size(path, ec)) : 0;
+    if (ec || fileSize < kEntryHeader) return corrupt("is shorter than its header");
+    std::ifstream in(path, std::ios::binary);
+    unsigned char header[kEntryHeader];
+    if (!in.read(reinterpret_cast<char*>(header), kEntryHeader)) return corrupt("cannot be read");
+    uint64_t tagSum = 0, size = 0, sum = 0;
+    std::memcpy(&tagSum, header + 8, 8);
+    std::memcpy(&size, header + 16, 8);
+    std::memcpy(&sum, header + 24, 8);
+    if (std::memcmp(header, kEntryMagic, 8) != 0) return corrupt("is not a Specula cache file");
+    if (tagSum != contentChecksum(tag.data(), tag.size())) return corrupt("holds another kind or version than '" + tag + "'");
+    // The size first, against the file and the caller's bound: a header cannot drive the allocation.
+    if (size != fileSize - kEntryHeader || size > maxPayload) return corrupt("has the wrong size");
+    payload.resize(size_t(size));
+    if (!in.read(reinterpret_cast<char*>(payload.data()), std::streamsize(size))) return corrupt("cannot be read");
+    if (contentChecksum(payload.data(), payload.size()) != sum) return corrupt("fails its content checksum");
+    return CacheLookup::Hit;
+}
+
+bool writeCacheEntry(const std::string& path, const std::string& tag, const std::vector<CachePiece>& pieces) {
+    ContentChecksum c;
+    uint64_t size = 0;
+    for (const CachePiece& p : pieces) {
+        c.add(p.data, p.bytes);
+        size += p.bytes;
+    }
+    unsigned char header[kEntryHeader];
+    const uint64_t tagSum = contentChecksum(tag.data(), tag.size()), sum = c.value();
+    std::memcpy(header, kEntryMagic, 8);
+    std::memcpy(header + 8, &tagSum, 8);
+    std::memcpy(header + 16, &size, 8);
+    std::memcpy(header + 24, &sum, 8);
+    std::vector<CachePiece> all{{header, kEntryHeader}};
+    all.insert(all.end(), pieces.begin(), pieces.end());
+    return writeFileAtomically(path, all);
 }
 
 }  // namespace specula

@@ -1,23 +1,20 @@
-// P-NDF manifold cache (issue 12 item 2): content-hash key, checksummed file format, atomic write, in-process sharing.
+// P-NDF manifold cache (issue 12 item 2): content-hash key and in-process sharing; the files through the cache service
+// (core/util/cache_dir.h: atomic write, content checksum).
 #include "nodes/bsdf/glint_pndf/pndf_cache.h"
+
+#include "core/util/cache_dir.h"
 
 #include <atomic>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <filesystem>
-#include <fstream>
 #include <iterator>
 #include <map>
 #include <mutex>
-#include <unistd.h>
 
 namespace specula::pndf {
 
 namespace {
-
-constexpr char kMagic[8] = {'S', 'P', 'N', 'D', 'F', 'M', 'F', '\0'};
-constexpr size_t kHeaderSize = 64;
 
 // Two independent 64-bit hashes over 8-byte words (tail zero-padded): FNV-1a on words, and a splitmix64-mixed
 // multiply-rotate chain with its own seed. Independent mixing makes an accidental double collision negligible.
@@ -50,12 +47,6 @@ struct Hasher {
     }
 };
 
-uint64_t checksum(const uint8_t* data, size_t n) {
-    Hasher h;
-    h.bytes(data, n);
-    return h.a;
-}
-
 struct Stats {
     std::atomic<uint64_t> memoryHits{0}, diskHits{0}, diskRejects{0}, builds{0}, diskWrites{0}, writeFailures{0};
 };
@@ -73,92 +64,53 @@ std::map<std::pair<uint64_t, uint64_t>, std::weak_ptr<const PndfManifold>>& memo
     return m;
 }
 
-template <class T>
-void putAt(std::vector<uint8_t>& buf, size_t off, const T& v) {
-    std::memcpy(buf.data() + off, &v, sizeof(T));
-}
-template <class T>
-T getAt(const uint8_t* buf, size_t off) {
-    T v;
-    std::memcpy(&v, buf + off, sizeof(T));
-    return v;
+// The cache service's format tag of a manifold file (core/util/cache_dir.h).
+std::string cacheTag() { return "pndf-manifold " + std::to_string(kPndfCacheVersion); }
+
+// What the payload starts with: the request it answers (u64 keyA, u64 keyB, u32 width, u32 height, f64 ε_J).
+constexpr size_t kRequestBytes = 32;
+std::vector<uint8_t> requestBytes(const PndfCacheKey& key, int width, int height, double jacobianClamp) {
+    std::vector<uint8_t> r(kRequestBytes);
+    const uint32_t w = uint32_t(width), h = uint32_t(height);
+    std::memcpy(r.data(), &key.a, 8);
+    std::memcpy(r.data() + 8, &key.b, 8);
+    std::memcpy(r.data() + 16, &w, 4);
+    std::memcpy(r.data() + 20, &h, 4);
+    std::memcpy(r.data() + 24, &jacobianClamp, 8);
+    return r;
 }
 
 // Reads and validates a cache file; nullptr when absent or invalid (invalid counts as a reject).
 std::shared_ptr<PndfManifold> readCache(const std::string& path, const PndfCacheKey& key, int width, int height,
                                         double jacobianClamp) {
-    std::error_code ec;
-    if (!std::filesystem::is_regular_file(path, ec)) return nullptr;
-    const uintmax_t fileSize = std::filesystem::file_size(path, ec);
-    auto reject = [] {
+    // The payload stays below what a map of the *requested* size can need (normals + bounds + clusters < 64 bytes
+    // per texel with every level), so a header cannot drive the allocation.
+    const uint64_t maxPayload = kRequestBytes + 64 + uint64_t(width) * uint64_t(height) * 64;
+    std::vector<uint8_t> buf;
+    const CacheLookup found = readCacheEntry(path, cacheTag(), maxPayload, buf);
+    if (found == CacheLookup::Missing) return nullptr;
+    auto reject = [&](const char* why) {
+        if (why) warnCorruptCacheEntry(path, why);
         ++stats().diskRejects;
         return nullptr;
     };
-    if (ec || fileSize < kHeaderSize) return reject();
-    std::ifstream in(path, std::ios::binary);
-    if (!in) return reject();
-    uint8_t hdr[kHeaderSize];
-    if (!in.read(reinterpret_cast<char*>(hdr), kHeaderSize)) return reject();
-    if (std::memcmp(hdr, kMagic, 8) != 0 || getAt<uint32_t>(hdr, 8) != kPndfCacheVersion ||
-        getAt<uint32_t>(hdr, 12) != kHeaderSize || getAt<uint64_t>(hdr, 16) != key.a ||
-        getAt<uint64_t>(hdr, 24) != key.b || getAt<uint32_t>(hdr, 32) != uint32_t(width) ||
-        getAt<uint32_t>(hdr, 36) != uint32_t(height) || getAt<double>(hdr, 40) != jacobianClamp)
-        return reject();
-    // The payload size must match the file exactly and stay below what a map of the *requested* size can need
-    // (normals + bounds + clusters < 64 bytes per texel with every level), so a header cannot drive the allocation.
-    const uint64_t payload = getAt<uint64_t>(hdr, 48);
-    const uint64_t maxPayload = 64 + uint64_t(width) * uint64_t(height) * 64;
-    if (payload > maxPayload || payload != fileSize - kHeaderSize) return reject();
-    std::vector<uint8_t> buf(static_cast<size_t>(payload));
-    if (!in.read(reinterpret_cast<char*>(buf.data()), std::streamsize(payload))) return reject();
-    if (checksum(buf.data(), buf.size()) != getAt<uint64_t>(hdr, 56)) return reject();
-    std::shared_ptr<PndfManifold> m = PndfManifold::deserialize(buf.data(), buf.size());
-    if (!m || m->width() != width || m->height() != height || m->jacobianClamp() != jacobianClamp) return reject();
+    if (found == CacheLookup::Corrupt) return reject(nullptr);  // readCacheEntry has warned
+    if (buf.size() < kRequestBytes ||
+        std::memcmp(buf.data(), requestBytes(key, width, height, jacobianClamp).data(), kRequestBytes) != 0)
+        return reject("answers another normal map");
+    std::shared_ptr<PndfManifold> m = PndfManifold::deserialize(buf.data() + kRequestBytes, buf.size() - kRequestBytes);
+    if (!m || m->width() != width || m->height() != height || m->jacobianClamp() != jacobianClamp)
+        return reject("holds no valid manifold of its size");
     return m;
 }
 
-void writeCache(const std::string& dir, const std::string& path, const PndfCacheKey& key, const PndfManifold& m) {
-    std::error_code ec;
-    std::filesystem::create_directories(dir, ec);
-    if (ec && !std::filesystem::is_directory(dir)) {
-        ++stats().writeFailures;
-        return;
-    }
+void writeCache(const std::string& path, const PndfCacheKey& key, const PndfManifold& m) {
+    const std::vector<uint8_t> request = requestBytes(key, m.width(), m.height(), m.jacobianClamp());
     const std::vector<uint8_t> payload = m.serialize();
-    std::vector<uint8_t> hdr(kHeaderSize, 0);
-    std::memcpy(hdr.data(), kMagic, 8);
-    putAt(hdr, 8, kPndfCacheVersion);
-    putAt(hdr, 12, uint32_t(kHeaderSize));
-    putAt(hdr, 16, key.a);
-    putAt(hdr, 24, key.b);
-    putAt(hdr, 32, uint32_t(m.width()));
-    putAt(hdr, 36, uint32_t(m.height()));
-    putAt(hdr, 40, m.jacobianClamp());
-    putAt(hdr, 48, uint64_t(payload.size()));
-    putAt(hdr, 56, checksum(payload.data(), payload.size()));
-    // Unique temporary name in the same folder, then rename: readers see either no file or a complete one.
-    static std::atomic<uint64_t> counter{0};
-    const std::string tmp = path + ".tmp." + std::to_string(::getpid()) + "." + std::to_string(counter++);
-    bool ok = false;
-    {
-        std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-        if (out) {
-            out.write(reinterpret_cast<const char*>(hdr.data()), std::streamsize(hdr.size()));
-            out.write(reinterpret_cast<const char*>(payload.data()), std::streamsize(payload.size()));
-            out.flush();
-            ok = bool(out);
-        }
-    }
-    if (ok) {
-        std::filesystem::rename(tmp, path, ec);
-        ok = !ec;
-    }
-    if (!ok) {
-        std::filesystem::remove(tmp, ec);
+    if (writeCacheEntry(path, cacheTag(), {{request.data(), request.size()}, {payload.data(), payload.size()}}))
+        ++stats().diskWrites;
+    else
         ++stats().writeFailures;
-        return;
-    }
-    ++stats().diskWrites;
 }
 
 }  // namespace
@@ -215,7 +167,7 @@ std::shared_ptr<const PndfManifold> loadOrBuildManifold(const std::vector<Vec3>&
     if (!m) {
         auto built = std::make_shared<PndfManifold>(normals, width, height, jacobianClamp);
         ++stats().builds;
-        if (!path.empty()) writeCache(cacheDir, path, key, *built);
+        if (!path.empty()) writeCache(path, key, *built);
         m = std::move(built);
     }
     std::lock_guard<std::mutex> lock(memoryMutex());

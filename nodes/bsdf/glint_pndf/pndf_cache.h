@@ -2,18 +2,14 @@
 // process through a weak_ptr map and across runs through a checksummed file per content hash in a cache folder.
 //
 // The key is two independent 64-bit hashes of (format version, width, height, ε_J, the normal data); the file is
-// <cacheDir>/pndf-<keyA><keyB>.bin:
-//   bytes  0..7   magic "SPNDFMF\0"
-//          8..11  u32 format version (kPndfCacheVersion)      12..15 u32 header size (64)
-//         16..31  u64 keyA, u64 keyB                           32..39 u32 width, u32 height
-//         40..47  f64 ε_J                                      48..55 u64 payload size
-//         56..63  u64 payload checksum (64-bit word-wise FNV-1a of the payload)
-//   then the payload, PndfManifold::serialize() (native byte order).
-// A file is used only when all of that matches the request and the file size is exactly header + payload (checked
-// before anything is allocated), the checksum agrees and deserialize accepts it; anything else (truncated, corrupt,
-// wrong version, foreign key) is ignored and replaced by a fresh build. Writes go to a temporary file that is renamed
-// into place (atomic on POSIX), and a cache folder that cannot be created or written is skipped silently: the cache
-// never fails a render.
+// <cacheDir>/pndf-<keyA><keyB>.bin, an entry of the cache service (core/util/cache_dir.h: header with the format tag
+// "pndf-manifold <kPndfCacheVersion>", payload size and content checksum, written atomically) whose payload is
+//   u64 keyA, u64 keyB, u32 width, u32 height, f64 ε_J   (the request it answers, 32 bytes)
+//   then PndfManifold::serialize() (native byte order).
+// A file is used only when the service accepts it (size bounded by the requested map before anything is allocated,
+// checksum), its request matches and deserialize accepts it; anything else (truncated, corrupt, wrong version,
+// foreign key) is rejected with a warning and replaced by a fresh build. A cache folder that cannot be created or
+// written is skipped: the cache never fails a render.
 #pragma once
 
 #include "nodes/bsdf/glint_pndf/pndf_manifold.h"
@@ -26,7 +22,7 @@
 namespace specula::pndf {
 
 // Bumped whenever the build (fit, bounds, replacement) or the byte layout changes, so stale files never match.
-constexpr uint32_t kPndfCacheVersion = 1;
+constexpr uint32_t kPndfCacheVersion = 2;  // 2: the cache service's file layout
 
 struct PndfCacheKey {
     uint64_t a = 0, b = 0;
