@@ -79,9 +79,11 @@
 #include "nodes/bsdf/glint_pndf/pndf_cache.h"
 #include "nodes/bsdf/glint_pndf/pndf_eval.h"
 #include "nodes/bsdf/glint_pndf/pndf_manifold.h"
+#include "nodes/bsdf/glint_pndf/pndf_masking.h"
 #include "tests/unit/pndf_test_maps.h"
 
 #include <benchmark/benchmark.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <chrono>
@@ -338,6 +340,25 @@ void BM_PndfCache(benchmark::State& state) {
     state.SetLabel(state.range(0) == 0 ? "build+write" : "load");
 }
 BENCHMARK(BM_PndfCache)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(3);
+
+// The GGX-fit masking build (pndf_masking.h, spec §4.2: target <= 5 s on one core at 1024², 32 azimuths) on one core
+// (a one-thread TBB arena), on the map of the PndfMasking.GgxFitBudgetAt1024 test, which asserts its node count and
+// memory exactly.
+void BM_PndfGgxFit(benchmark::State& state) {
+    const int n = int(state.range(0));
+    const PndfManifold m(testing::sinusoidMap(n, 2, 24, 0.5), n, n, kDefaultJacobianClamp, false);
+    tbb::task_arena one(1);
+    size_t bytes = 0;
+    for (auto _ : state) {
+        one.execute([&] {
+            const PndfGgxFit fit(m, 32);
+            bytes = fit.memoryBytes();
+        });
+        benchmark::DoNotOptimize(bytes);
+    }
+    state.counters["MiB"] = double(bytes) / 1048576.0;
+}
+BENCHMARK(BM_PndfGgxFit)->Arg(256)->Arg(1024)->Unit(benchmark::kMillisecond)->Iterations(2);
 
 }  // namespace
 

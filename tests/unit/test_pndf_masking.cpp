@@ -521,21 +521,22 @@ TEST(PndfMasking, GgxFitAgainstAnalyticG1) {
     }
 }
 
-// Spec §4.2 budget at 1024²: memory <= 7 MiB (with the manifold's 26.6 MB, 33.6 MB: inside issue 12's 34 MB), build
-// time on one core printed (target <= 5 s).
+// Spec §4.2 budget at 1024²: memory <= 7 MiB (with the manifold's 26.6 MB, 33.6 MB: inside issue 12's 34 MB). The build
+// fits every node of levels 1..10 once: (1024 >> ℓ)² nodes at level ℓ, (4^10 - 1)/3 = 349,525 in all, 20 bytes each
+// (float a, b, e, tilt x, tilt y). Its time on one core (target <= 5 s) is bench_pndf's BM_PndfGgxFit/1024
+// (docs/performance.md).
 TEST(PndfMasking, GgxFitBudgetAt1024) {
     const int n = 1024;
     const PndfManifold m(sinusoidMap(n, 2, 24, 0.5), n, n, kDefaultJacobianClamp, false);
-    // On one core (a one-thread TBB arena), the budget's terms.
-    std::unique_ptr<PndfGgxFit> built;
-    auto t0 = std::chrono::steady_clock::now();
-    tbb::task_arena one(1);
-    one.execute([&] { built = std::make_unique<PndfGgxFit>(m, 32); });
-    const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    const PndfGgxFit& fit = *built;
-    std::printf("GGX fit 1024², 32 azimuths, one thread: %.2f s, %zu bytes (%.3f MiB), levels %d..%d\n", secs, fit.memoryBytes(),
+    const PndfGgxFit fit(m, 32);
+    std::printf("GGX fit 1024², 32 azimuths: %zu bytes (%.3f MiB), levels %d..%d\n", fit.memoryBytes(),
                 fit.memoryBytes() / 1048576.0, fit.firstLevel(), fit.firstLevel() + fit.levelCount() - 1);
-    EXPECT_LE(fit.memoryBytes(), size_t(7) << 20);
+    EXPECT_EQ(fit.firstLevel(), 1);
     EXPECT_EQ(fit.levelCount(), 10);
-    EXPECT_LT(secs, 10.0);  // headroom over the 5 s target for a shared CI machine; the measured time is printed
+    EXPECT_EQ(fit.azimuths(), 32);
+    size_t nodes = 0;
+    for (int l = 1; l <= 10; ++l) nodes += size_t(n >> l) * (n >> l);
+    EXPECT_EQ(nodes, 349525u);
+    EXPECT_EQ(fit.memoryBytes(), nodes * sizeof(PndfGgxFit::Coeffs));
+    EXPECT_LE(fit.memoryBytes(), size_t(7) << 20);
 }

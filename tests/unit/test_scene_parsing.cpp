@@ -6,7 +6,6 @@
 
 #include <gtest/gtest.h>
 
-#include <chrono>
 #include <filesystem>
 
 using namespace specula;
@@ -215,7 +214,8 @@ TEST(SceneParsing, MissingSceneFileIsIoError) {
 // did not return within 2 minutes (issue 35): nlohmann's callback parser, which checked duplicate keys and depth,
 // rescans the parent object at the end of every child object, so an object of n objects cost n² steps (20,000
 // nodes: 2.4 s, 100,000: minutes). The SAX check that replaced it is linear; this load took 0.7 s in `specula info`.
-// The bound is 30 times that, and far below the quadratic time.
+// The time is bench_scene_load's (20,000, 60,000 and 100,000 nodes); a quadratic parse would run into this test's
+// ctest TIMEOUT (tests/CMakeLists.txt: 30 times the linear time, far below the quadratic one) instead of a bound here.
 TEST(SceneParsing, ChainedGraphOfHundredThousandNodesIsReadInLinearTime) {
     auto chainScene = [](int links) {
         std::string nodes = R"("c0": {"type": "math.mul.float", "inputs": {"a": 0.3, "b": 1.0}})";
@@ -227,7 +227,6 @@ TEST(SceneParsing, ChainedGraphOfHundredThousandNodesIsReadInLinearTime) {
                      R"("shapes": [{"type": "sphere", "material": "m"}])");
     };
     const std::string text = chainScene(100000);
-    const auto start = std::chrono::steady_clock::now();
     try {
         loadSceneFromString(text, ".");
         FAIL() << "a material of 100,001 nodes was accepted";
@@ -235,8 +234,6 @@ TEST(SceneParsing, ChainedGraphOfHundredThousandNodesIsReadInLinearTime) {
         EXPECT_EQ(e.pointer(), "/materials/m/nodes");
         EXPECT_NE(std::string(e.what()).find("100001 nodes; the limit is 65536"), std::string::npos) << e.what();
     }
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    EXPECT_LT(seconds, 20.0) << "parsing a 100,000-member object is no longer linear";
     // The structure rules still hold with the SAX check: a duplicate node id, and nesting deeper than 64 levels.
     try {
         loadSceneFromString(scene("", kCamera, R"("materials": {"grey": {"nodes": {"d": {"type": "bsdf.diffuse"}, )"
