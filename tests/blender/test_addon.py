@@ -381,23 +381,24 @@ render_to(os.path.join(OUT_DIR, "cancelled.exr"), "SPECULA")
 wall = time.perf_counter() - t0
 timer.cancel()
 info = engine_mod.last_render
-check("cancel stops the render within a second", info.get("cancel_seconds", 99.0) < 1.0,
-      "%.3f s after test_break, render call %.2f s" % (info.get("cancel_seconds", 99.0), wall))
-check("the CLI ended as interrupted (exit 130, partial image)", info.get("returncode") == 130,
-      str(info.get("returncode")))
+# No wall-clock bound (issue 36): the CLI stopping on its own, exit 130, is the proof; the engine kills it
+# (exit -9) only when it outlives the grace. The latency is reported.
+check("cancel: the CLI stops its tiles and ends as interrupted (exit 130, partial image), not killed",
+      info.get("returncode") == 130 and "cancel_seconds" in info,
+      "exit %s, %.3f s after test_break, render call %.2f s"
+      % (info.get("returncode"), info.get("cancel_seconds", float("nan")), wall))
 
 # ---- 6. errors become Blender errors, not hangs ------------------------------------------------------------------
 scene.specula.samples = 4
 scene.render.resolution_x, scene.render.resolution_y = 32, 24
 prefs().binary_path = "/nonexistent/specula"
-t0 = time.perf_counter()
 try:
     bpy.ops.render.render()
     raised = ""
 except RuntimeError as e:
     raised = str(e)
-check("a bad binary path is a Blender error naming it", "/nonexistent/specula" in raised
-      and time.perf_counter() - t0 < 5.0, raised.strip() or str(engine_mod.last_render))
+check("a bad binary path is a Blender error naming it", "/nonexistent/specula" in raised,
+      raised.strip() or str(engine_mod.last_render))
 prefs().binary_path = SPECULA_BIN
 
 bad = bpy.data.materials.new("Broken")

@@ -20,8 +20,17 @@ _modules = (preferences, properties, nodes, engine, operators, ui)
 
 
 def register():
-    for m in _modules:
-        m.register()
+    # A module that fails (nodes.py without a node catalogue) takes back what the ones before it registered, so the
+    # add-on can be enabled again once the cause is fixed.
+    done = []
+    try:
+        for m in _modules:
+            m.register()
+            done.append(m)
+    except Exception:
+        for m in reversed(done):
+            m.unregister()
+        raise
 
 
 def unregister():
