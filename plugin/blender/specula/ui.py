@@ -10,6 +10,7 @@ EXTRA_PANELS = {"EEVEE_MATERIAL_PT_context_material", "EEVEE_MATERIAL_PT_surface
 
 
 class SpeculaPanel:
+    """A panel of (owner, property) rows, shown only while Specula is the render engine."""
     bl_space_type = "PROPERTIES"
     bl_region_type = "WINDOW"
     COMPAT_ENGINES = {ENGINE}
@@ -18,32 +19,30 @@ class SpeculaPanel:
     def poll(cls, context):
         return context.engine in cls.COMPAT_ENGINES
 
+    def draw(self, context):
+        self.layout.use_property_split = True
+        for owner, name in self.rows(context):
+            self.layout.prop(owner, name)
+
 
 class RENDER_PT_specula_sampling(SpeculaPanel, bpy.types.Panel):
     bl_label = "Specula"
     bl_context = "render"
 
-    def draw(self, context):
-        layout = self.layout
-        layout.use_property_split = True
+    def rows(self, context):
         s = context.scene.specula
-        for name in ("samples", "seed", "integrator", "max_bounces", "clamp_indirect", "pixel_filter",
-                     "area_lights", "tile_size"):
-            layout.prop(s, name)
+        return [(s, name) for name in ("samples", "seed", "integrator", "max_bounces", "clamp_indirect",
+                                       "pixel_filter", "area_lights", "tile_size")]
 
 
 class VIEWLAYER_PT_specula_passes(SpeculaPanel, bpy.types.Panel):
     bl_label = "Specula Passes"
     bl_context = "view_layer"
 
-    def draw(self, context):
-        layout = self.layout
-        layout.use_property_split = True
+    def rows(self, context):
         vl = context.view_layer
-        layout.prop(vl.specula, "pass_diffuse")
-        layout.prop(vl.specula, "pass_specular")
-        layout.prop(vl, "use_pass_normal")
-        layout.prop(vl, "use_pass_z")
+        return [(vl.specula, "pass_diffuse"), (vl.specula, "pass_specular"), (vl, "use_pass_normal"),
+                (vl, "use_pass_z")]
 
 
 _classes = (RENDER_PT_specula_sampling, VIEWLAYER_PT_specula_passes)
