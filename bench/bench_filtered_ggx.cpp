@@ -43,8 +43,9 @@ LobeSetup setupFor(Filter f, Kernel k) {
     return s;
 }
 
-void BM_GgxLobe(benchmark::State& state) {
-    GgxLobe lobe(0.05f, 0.03f, Fresnel::schlick(Color3(0.95f, 0.64f, 0.54f)));
+// The timed loop: evalPdf over pairs of the 64 fixed directions.
+template <class Lobe>
+void evalLoop(benchmark::State& state, const Lobe& lobe) {
     auto& d = dirs();
     size_t k = 0;
     for (auto _ : state) {
@@ -54,17 +55,15 @@ void BM_GgxLobe(benchmark::State& state) {
     }
 }
 
+void BM_GgxLobe(benchmark::State& state) {
+    evalLoop(state, GgxLobe(0.05f, 0.03f, Fresnel::schlick(Color3(0.95f, 0.64f, 0.54f))));
+}
+
 void BM_Filtered(benchmark::State& state) {
     Filter f = Filter(state.range(0));
     Kernel kn = Kernel(state.range(1));
-    FilteredGgxLobe lobe(setupFor(f, kn), Fresnel::schlick(Color3(0.95f, 0.64f, 0.54f)));
-    auto& d = dirs();
-    size_t k = 0;
-    for (auto _ : state) {
-        Color3 e = lobe.evalPdf(LobeQuery{d[k & 63], d[(k * 7 + 3) & 63], kLightDistance}).f;
-        benchmark::DoNotOptimize(e);
-        ++k;
-    }
+    const Fresnel fresnel = Fresnel::schlick(Color3(0.95f, 0.64f, 0.54f));
+    evalLoop(state, FilteredGgxLobe(setupFor(f, kn), fresnel));
     state.SetLabel(std::string(filterName(f)) + (kn == Kernel::Full ? "/full" : "/axis_aligned"));
 }
 
@@ -81,21 +80,18 @@ BENCHMARK(BM_Filtered)
 }  // namespace
 
 int main(int argc, char** argv) {
-    benchmark::Initialize(&argc, argv);
-    specula::bench::RatioReporter rep;
-    benchmark::RunSpecifiedBenchmarks(&rep);
-    double ggx = 0, none = 0;
-    for (auto& [k, v] : rep.medianNs) {
-        if (k.rfind("BM_GgxLobe", 0) == 0) ggx = v;
-        if (rep.label[k] == "none/full") none = v;
-    }
-    if (ggx > 0 && none > 0) {
-        std::printf("\nmedian ns per eval; ratios vs GgxLobe (%.2f ns) and vs FilteredGgxLobe none/full (%.2f ns)\n", ggx, none);
+    return specula::bench::runWithRatios(argc, argv, [](specula::bench::RatioReporter& rep) {
+        double ggx = 0, none = 0;
         for (auto& [k, v] : rep.medianNs) {
-            if (k.rfind("BM_Filtered", 0) != 0) continue;
-            std::printf("RATIO %-28s %7.2f ns  x%.3f vs GgxLobe  x%.3f vs none\n", rep.label[k].c_str(), v, v / ggx, v / none);
+            if (k.rfind("BM_GgxLobe", 0) == 0) ggx = v;
+            if (rep.label[k] == "none/full") none = v;
         }
-    }
-    benchmark::Shutdown();
-    return 0;
+        if (ggx > 0 && none > 0) {
+            std::printf("\nmedian ns per eval; ratios vs GgxLobe (%.2f ns) and vs FilteredGgxLobe none/full (%.2f ns)\n", ggx, none);
+            for (auto& [k, v] : rep.medianNs) {
+                if (k.rfind("BM_Filtered", 0) != 0) continue;
+                std::printf("RATIO %-28s %7.2f ns  x%.3f vs GgxLobe  x%.3f vs none\n", rep.label[k].c_str(), v, v / ggx, v / none);
+            }
+        }
+    });
 }

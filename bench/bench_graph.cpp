@@ -124,17 +124,15 @@ BENCHMARK(BM_GgxGraph)->Repetitions(5)->ReportAggregatesOnly(true);
 }  // namespace
 
 int main(int argc, char** argv) {
-    benchmark::Initialize(&argc, argv);
-    specula::bench::RatioReporter rep;
-    benchmark::RunSpecifiedBenchmarks(&rep);
-    if (rep.medianNs.count("BM_ShadeOnly") && rep.medianNs.count("BM_BuildOnly"))
-        std::printf("closure building alone: graph shade %.2f ns / hand-written %.2f ns = ratio %.3f\n", rep.medianNs["BM_ShadeOnly"],
-                    rep.medianNs["BM_BuildOnly"], rep.medianNs["BM_ShadeOnly"] / rep.medianNs["BM_BuildOnly"]);
-    if (rep.medianNs.count("BM_GgxGraph") && rep.medianNs.count("BM_GgxDirect")) {
-        double g = rep.medianNs["BM_GgxGraph"], d = rep.medianNs["BM_GgxDirect"];
-        std::printf("graph/direct GGX (shade+eval) median: %.2f ns / %.2f ns = ratio %.3f (overhead %+.1f%%, target <= +10%%)\n", g, d,
-                    g / d, (g / d - 1.0) * 100.0);
-    }
-    benchmark::Shutdown();
-    return 0;
+    return specula::bench::runWithRatios(argc, argv, [](specula::bench::RatioReporter& rep) {
+        if (rep.medianNs.count("BM_ShadeOnly") && rep.medianNs.count("BM_BuildOnly"))
+            std::printf("closure building alone: graph shade %.2f ns / hand-written %.2f ns = ratio %.3f\n",
+                        rep.medianNs["BM_ShadeOnly"], rep.medianNs["BM_BuildOnly"],
+                        rep.medianNs["BM_ShadeOnly"] / rep.medianNs["BM_BuildOnly"]);
+        if (rep.medianNs.count("BM_GgxGraph") && rep.medianNs.count("BM_GgxDirect")) {
+            double g = rep.medianNs["BM_GgxGraph"], d = rep.medianNs["BM_GgxDirect"];
+            std::printf("graph/direct GGX (shade+eval) median: %.2f ns / %.2f ns = ratio %.3f (overhead %+.1f%%, "
+                        "target <= +10%%)\n", g, d, g / d, (g / d - 1.0) * 100.0);
+        }
+    });
 }

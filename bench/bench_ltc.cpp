@@ -105,17 +105,14 @@ BENCHMARK(BM_SampledNee)->Repetitions(5)->ReportAggregatesOnly(true);
 }  // namespace
 
 int main(int argc, char** argv) {
-    benchmark::Initialize(&argc, argv);
-    specula::bench::RatioReporter rep;
-    benchmark::RunSpecifiedBenchmarks(&rep);
-    double nee = 0;
-    for (auto& [k, v] : rep.medianNs)
-        if (k.rfind("BM_SampledNee", 0) == 0) nee = v;
-    if (nee > 0) {
-        std::printf("\nmedian ns per quad-light evaluation; ratio vs one sampled NEE sample (%.1f ns)\n", nee);
+    return specula::bench::runWithRatios(argc, argv, [](specula::bench::RatioReporter& rep) {
+        double nee = 0;
         for (auto& [k, v] : rep.medianNs)
-            std::printf("RATIO %-36s %7.1f ns  x%.2f\n", rep.label[k].c_str(), v, v / nee);
-    }
-    benchmark::Shutdown();
-    return 0;
+            if (k.rfind("BM_SampledNee", 0) == 0) nee = v;
+        if (nee > 0) {
+            std::printf("\nmedian ns per quad-light evaluation; ratio vs one sampled NEE sample (%.1f ns)\n", nee);
+            for (auto& [k, v] : rep.medianNs)
+                std::printf("RATIO %-36s %7.1f ns  x%.2f\n", rep.label[k].c_str(), v, v / nee);
+        }
+    });
 }

@@ -1,10 +1,11 @@
 // One ratio reporter for the benches: a console reporter that also keeps each benchmark's median CPU time (ns),
-// so that a bench can print "A / B" ratios after the run (bench_filtered_ggx, bench_graph).
+// so that a bench can print "A / B" ratios after the run (bench_filtered_ggx, bench_graph, bench_ltc).
 #pragma once
 
 #include <benchmark/benchmark.h>
 
 #include <cstdio>
+#include <functional>
 #include <map>
 #include <string>
 #include <vector>
@@ -27,5 +28,15 @@ public:
     }
     bool has(const std::string& key) const { return medianNs.count(key) != 0; }
 };
+
+// A bench's main: runs the benchmarks of the command line through a RatioReporter, then hands it to printRatios.
+inline int runWithRatios(int argc, char** argv, const std::function<void(RatioReporter&)>& printRatios) {
+    benchmark::Initialize(&argc, argv);
+    RatioReporter rep;
+    benchmark::RunSpecifiedBenchmarks(&rep);
+    printRatios(rep);
+    benchmark::Shutdown();
+    return 0;
+}
 
 }  // namespace specula::bench

@@ -1,6 +1,7 @@
 // Graph core: registry completeness (drift guard), compiler (folding, pruning, topological order),
 // CPU evaluator and loadGraphMaterial against closed forms and direct lobe calls.
 #include "core/graph/graph_material.h"
+#include "tests/unit/render_support.h"
 #include "tests/unit/test_support.h"
 #include "core/graph/node_spec.h"
 #include "core/render/lobes/fresnel.h"
@@ -18,21 +19,7 @@ using nlohmann::json;
 namespace {
 
 ShadingPoint makeSp() {
-    ShadingPoint sp;
-    sp.p = Vec3(1, 2, 3);
-    sp.n = sp.ng = Vec3(0, 0, 1);
-    sp.tangent = Vec4(1, 0, 0, 1);
-    sp.uv = Vec2(0.25f, 0.75f);
-    sp.frame = Frame();
-    sp.wo = glm::normalize(Vec3(0.3f, -0.2f, 0.9f));
-    sp.hasDifferentials = true;
-    sp.dpdx = Vec3(0.01f, 0, 0);
-    sp.dpdy = Vec3(0, 0.02f, 0);
-    sp.duvdx = Vec2(0.001f, 0);
-    sp.duvdy = Vec2(0, 0.002f);
-    sp.dndx = Vec3(0.1f, 0, 0);
-    sp.dndy = Vec3(0, 0.1f, 0);
-    return sp;
+    return test::shadingPointWithDifferentials(glm::normalize(Vec3(0.3f, -0.2f, 0.9f)), 0.1f);
 }
 
 std::shared_ptr<Material> load(const json& j) { return loadGraphMaterial(j, "/materials/m", GraphLoadContext{}); }

@@ -4,6 +4,7 @@
 #include "core/api/specula.h"
 #include "core/texture/normal_map_gen.h"
 #include "plugin/cli/validation_metrics.h"
+#include "render_support.h"
 #include "test_support.h"
 
 #include <gtest/gtest.h>
@@ -61,11 +62,7 @@ std::string scene(const std::string& method, const std::string& map, float d, in
 }
 
 std::vector<float> specular(const std::string& text, const std::string& dir) {
-    Scene sc = loadSceneFromString(text, dir);
-    RenderOutput out = renderScene(sc);
-    const AovBuffer* a = out.images.find("specular");
-    if (!a) throw std::runtime_error("no specular AOV");
-    return a->pixels;
+    return test::renderAov(text, dir, "specular");
 }
 
 // RMSE over every pixel and channel of the specular AOV: the code of `specula compare --mask all`.

@@ -13,6 +13,7 @@
 #include "core/render/bsdf.h"
 #include "core/render/material.h"
 #include "core/render/shading.h"
+#include "tests/unit/render_support.h"
 #include "tests/unit/test_support.h"
 
 #include <gtest/gtest.h>
@@ -184,20 +185,7 @@ size_t caseCount() {
 // The fixed shading point: the unperturbed frame is the world frame (normal +z, tangent +x), with ray differentials
 // (every differential a lobe reads: dp, duv, dn, dwo) so that the footprint-driven lobes filter.
 ShadingPoint shadingPoint(const Vec3& wo) {
-    ShadingPoint sp;
-    sp.p = Vec3(1, 2, 3);
-    sp.n = sp.ng = Vec3(0, 0, 1);
-    sp.tangent = Vec4(1, 0, 0, 1);
-    sp.uv = Vec2(0.25f, 0.75f);
-    sp.frame = Frame();
-    sp.wo = wo;
-    sp.hasDifferentials = true;
-    sp.dpdx = Vec3(0.01f, 0, 0);
-    sp.dpdy = Vec3(0, 0.02f, 0);
-    sp.duvdx = Vec2(0.001f, 0);
-    sp.duvdy = Vec2(0, 0.002f);
-    sp.dndx = Vec3(0.05f, 0, 0);
-    sp.dndy = Vec3(0, 0.05f, 0);
+    ShadingPoint sp = test::shadingPointWithDifferentials(wo, 0.05f);
     sp.dwodx = Vec3(0.002f, 0, 0);
     sp.dwody = Vec3(0, 0.003f, 0);
     return sp;

@@ -2,6 +2,7 @@
 // without occluders (closed form vs Monte Carlo), no bias beyond noise with shadows, and lower noise at low spp.
 #include "core/render/renderer.h"
 #include "core/scene/scene_loader.h"
+#include "render_support.h"
 #include "test_support.h"
 
 #include <gtest/gtest.h>
@@ -34,24 +35,13 @@ std::string shadowScene(const std::string& material, bool occluder, int spp, con
 
 const char* kDiffuse = R"({"nodes": {"d": {"type": "bsdf.diffuse", "inputs": {"color": 0.6}}}, "output": "@d.bsdf"})";
 
+// pixelCentres: every sample at the pixel centre, no coverage noise (none of these scenes asks for it itself).
 std::vector<float> beauty(const std::string& json, bool pixelCentres = false) {
-    Scene s = loadSceneFromString(json, test::sourcePath("examples"));
-    s.render.pixelCenter = pixelCentres;  // every sample at the pixel centre: no coverage noise
-    RenderOutput r = renderScene(s);
-    return r.images.find("beauty")->pixels;
+    return test::renderAov(json, test::sourcePath("examples"), "beauty", pixelCentres);
 }
 
-double rmse(const std::vector<float>& a, const std::vector<float>& b) {
-    double s = 0;
-    for (size_t i = 0; i < a.size(); ++i) s += (double(a[i]) - b[i]) * (double(a[i]) - b[i]);
-    return std::sqrt(s / a.size());
-}
-
-double mean(const std::vector<float>& a) {
-    double s = 0;
-    for (float v : a) s += v;
-    return s / a.size();
-}
+using test::meanOf;
+using test::rmseOf;
 
 }  // namespace
 
@@ -61,12 +51,12 @@ TEST(LtcRender, UnshadowedDiffuseQuadLightEqualsMonteCarloPerPixel) {
     auto ltc = beauty(shadowScene(kDiffuse, false, 1, "ltc"), true);
     auto mc = beauty(shadowScene(kDiffuse, false, 2048, "sampled", 1), true);
     auto mc2 = beauty(shadowScene(kDiffuse, false, 2048, "sampled", 2), true);
-    const double sigma = rmse(mc, mc2) / std::sqrt(2.0);
+    const double sigma = rmseOf(mc, mc2) / std::sqrt(2.0);
     double worst = 0;
     for (size_t i = 0; i < ltc.size(); ++i) worst = std::max(worst, std::abs(double(ltc[i]) - mc[i]));
     EXPECT_LT(worst, 5.0 * sigma) << "sigma " << sigma;
-    EXPECT_LT(rmse(ltc, mc), 1.2 * sigma);
-    EXPECT_NEAR(mean(ltc) / mean(mc), 1.0, 2e-3);
+    EXPECT_LT(rmseOf(ltc, mc), 1.2 * sigma);
+    EXPECT_NEAR(meanOf(ltc) / meanOf(mc), 1.0, 2e-3);
 }
 
 TEST(LtcRender, ShadowedLtcConvergesToSampledAndIsLessNoisy) {
@@ -77,18 +67,18 @@ TEST(LtcRender, ShadowedLtcConvergesToSampledAndIsLessNoisy) {
         auto ref = beauty(shadowScene(kDiffuse, true, N, "sampled", 1), centres);
         auto ref2 = beauty(shadowScene(kDiffuse, true, N, "sampled", 2), centres);
         auto ltc = beauty(shadowScene(kDiffuse, true, N, "ltc", 3), centres);
-        const double noise = rmse(ref, ref2);  // √2 × the per-image noise of one sampled render
-        const double diff = rmse(ltc, ref);
+        const double noise = rmseOf(ref, ref2);  // √2 × the per-image noise of one sampled render
+        const double diff = rmseOf(ltc, ref);
         EXPECT_LT(diff, noise) << "ltc-vs-sampled " << diff << " sampled-vs-sampled " << noise;
-        EXPECT_NEAR(mean(ltc) / mean(ref), 1.0, 2e-3);
+        EXPECT_NEAR(meanOf(ltc) / meanOf(ref), 1.0, 2e-3);
         // 4 spp: RMSE against the 4096-spp reference. With pixel-centre samples the RMSE is the shading estimator's
         // alone (issue 10: ltc <= 0.5× sampled); with pixel jitter both also carry the same coverage noise of the
         // occluder's silhouette and the shadow's edge, which bounds the ratio from below.
         auto s4 = beauty(shadowScene(kDiffuse, true, 4, "sampled", 5), centres);
         auto l4 = beauty(shadowScene(kDiffuse, true, 4, "ltc", 5), centres);
-        const double ratio = rmse(l4, ref) / rmse(s4, ref);
+        const double ratio = rmseOf(l4, ref) / rmseOf(s4, ref);
         std::printf("%s: 4-spp RMSE ltc %.5f sampled %.5f ratio %.3f; 4096-spp ltc-vs-sampled %.5f, noise floor %.5f\n",
-                    centres ? "pixel centres" : "jittered", rmse(l4, ref), rmse(s4, ref), ratio, diff, noise);
+                    centres ? "pixel centres" : "jittered", rmseOf(l4, ref), rmseOf(s4, ref), ratio, diff, noise);
         EXPECT_LE(ratio, centres ? 0.35 : 0.55);  // measured 0.223 / 0.437 (issue 10 asks <= 0.5)
     }
 }

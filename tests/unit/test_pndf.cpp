@@ -21,6 +21,18 @@ using namespace specula::pndf::testing;
 
 namespace {
 
+// The n x n map of the affine field s(x) = s0 + A x (x = (column, row)), A = [[a00, a01], [a10, a11]], with
+// n_z = sqrt(1 - |s|²) (spec §6 invariant 2).
+std::vector<Vec3> affineFieldMap(int n, double s0x, double s0y, double a00, double a01, double a10, double a11) {
+    std::vector<Vec3> normals(size_t(n) * n);
+    for (int r = 0; r < n; ++r)
+        for (int c = 0; c < n; ++c) {
+            double sx = s0x + a00 * c + a01 * r, sy = s0y + a10 * c + a11 * r;
+            normals[size_t(r) * n + c] = Vec3(float(sx), float(sy), float(std::sqrt(1 - sx * sx - sy * sy)));
+        }
+    return normals;
+}
+
 }  // namespace
 
 TEST(Pndf, ManifoldBuildAndBounds) {
@@ -141,13 +153,7 @@ TEST(Pndf, AffineFieldClosedForm) {
     const double s0x = 0.1, s0y = -0.05;
     const double a00 = 0.006, a01 = 0.002, a10 = -0.001, a11 = 0.005;  // |det A| = 3.2e-5 ≫ ε_J
     const double det = a00 * a11 - a01 * a10;
-    std::vector<Vec3> normals(size_t(n) * n);
-    for (int r = 0; r < n; ++r)
-        for (int c = 0; c < n; ++c) {
-            double sx = s0x + a00 * c + a01 * r, sy = s0y + a10 * c + a11 * r;
-            normals[size_t(r) * n + c] = Vec3(float(sx), float(sy), float(std::sqrt(1 - sx * sx - sy * sy)));
-        }
-    PndfManifold m(normals, n, n);
+    PndfManifold m(affineFieldMap(n, s0x, s0y, a00, a01, a10, a11), n, n);
     std::mt19937 rng(5);
     std::uniform_real_distribution<double> u(-1.2, 1.2);
     double maxRel = 0;
@@ -281,13 +287,7 @@ TEST(Pndf, ClusterFitIsExactOnAnAffineField) {
     // then the closed form of invariant 2.
     const int n = 64;
     const double s0x = -0.2, s0y = 0.1, a00 = 0.004, a01 = -0.0015, a10 = 0.002, a11 = 0.005;
-    std::vector<Vec3> normals(size_t(n) * n);
-    for (int r = 0; r < n; ++r)
-        for (int c = 0; c < n; ++c) {
-            double sx = s0x + a00 * c + a01 * r, sy = s0y + a10 * c + a11 * r;
-            normals[size_t(r) * n + c] = Vec3(float(sx), float(sy), float(std::sqrt(1 - sx * sx - sy * sy)));
-        }
-    PndfManifold m(normals, n, n);
+    PndfManifold m(affineFieldMap(n, s0x, s0y, a00, a01, a10, a11), n, n);
     ASSERT_EQ(m.clusterLevelCount(), 5);
     double maxCornerErr = 0, maxResidual = 0;
     for (int l = 1; l <= m.clusterLevelCount(); ++l) {

@@ -9,11 +9,11 @@
 // density), 1024-spp reference, maps bumps and brushed.
 #include "core/api/specula.h"
 #include "plugin/cli/validation_metrics.h"
+#include "render_support.h"
 #include "test_support.h"
 
 #include <gtest/gtest.h>
 
-#include <chrono>
 #include <cstdio>
 #include <sstream>
 #include <string>
@@ -79,14 +79,8 @@ std::string scene(bool pndf, const std::string& kind, int spp, int seed, bool pi
     return s.str();
 }
 
-std::vector<float> specular(const std::string& text, const std::string& dir, double* seconds = nullptr) {
-    auto t0 = std::chrono::steady_clock::now();
-    Scene sc = loadSceneFromString(text, dir);
-    RenderOutput out = renderScene(sc);
-    if (seconds) *seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    const AovBuffer* a = out.images.find("specular");
-    if (!a) throw std::runtime_error("no specular AOV");
-    return a->pixels;
+std::vector<float> specular(const std::string& text, const std::string& dir) {
+    return test::renderAov(text, dir, "specular");
 }
 
 // RMSE over every pixel and channel of the specular AOV: the code of `specula compare --mask all`.
@@ -99,15 +93,14 @@ TEST(PndfValidation, SixtyFourSppAgainstNormalMapping) {
     std::printf("  map      nm64       pndf64     pndf256    ratio pndf/nm  pndf64/pndf256  (RMSE, specular AOV)\n");
     for (const char* kind : {"bumps", "brushed"}) {
         const bool bumps = std::string(kind) == "bumps";
-        double tRef = 0, tNm = 0, tP = 0, tPhi = 0;
-        std::vector<float> ref = specular(scene(false, kind, kRefSpp, kRefSeed), dir, &tRef);
-        double nm = rmse(specular(scene(false, kind, kSpp, kTestSeed), dir, &tNm), ref);
-        double p64 = rmse(specular(scene(true, kind, kSpp, kTestSeed), dir, &tP), ref);
+        std::vector<float> ref = specular(scene(false, kind, kRefSpp, kRefSeed), dir);
+        double nm = rmse(specular(scene(false, kind, kSpp, kTestSeed), dir), ref);
+        double p64 = rmse(specular(scene(true, kind, kSpp, kTestSeed), dir), ref);
         // The bias-floor check on bumps only: brushed P-NDF at 256 spp costs ~35 s on 2 cores.
-        double p256 = bumps ? rmse(specular(scene(true, kind, kHiSpp, kTestSeed), dir, &tPhi), ref) : 0.0;
+        double p256 = bumps ? rmse(specular(scene(true, kind, kHiSpp, kTestSeed), dir), ref) : 0.0;
         double pPix = rmse(specular(scene(true, kind, kSpp, kTestSeed, true), dir), ref);
-        std::printf("  %-8s %-10.4g %-10.4g %-10.4g %-14.3f %-10.3f  times ref %.1f s, nm %.2f s, pndf %.2f / %.2f s\n",
-                    kind, nm, p64, p256, p64 / nm, bumps ? p64 / p256 : 0.0, tRef, tNm, tP, tPhi);
+        std::printf("  %-8s %-10.4g %-10.4g %-10.4g %-14.3f %-10.3f\n", kind, nm, p64, p256, p64 / nm,
+                    bumps ? p64 / p256 : 0.0);
         std::printf("  %-8s pixel-centred box k 1: RMSE %.4g, ratio vs normal mapping %.3f, vs the default %.3f\n", kind,
                     pPix, pPix / nm, pPix / p64);
         // Claims, with the margins above.
