@@ -1,5 +1,5 @@
 // bsdf.glint: f.cos of the procedural glint BRDF (C20) with GGAA and slope correlation (C21), the GLSL twin of
-// nodes/bsdf/glint/glint_bsdf.h (same operations, spec glint-brdf.md §3 S0-S7).
+// nodes/bsdf/glint/glint_bsdf.h and the headers it includes (same operations, spec glint-brdf.md §3 S0-S7).
 // The dictionary is the node's resource 'dictionary' (a sampler1DArray parameter; the emitter declares and binds it and
 // lists its texels and sampler state in the module's resource manifest): RGBA32F, width 64, 1024 layers, our exact box
 // MIP chain 0..6, trilinear, mirrored repeat on s (C21 supplemental). Layer = k*64 + d/3, channel = d%3 (C20/C21
@@ -174,7 +174,7 @@ void spc_bsdf_glint(SpeculaClosureQuery q, SpeculaShadingInputs s, sampler1DArra
     // query's light otherwise (a direction query fixes wi: the light's centre, the environment's normal). The quad
     // partner's frame, view and position come from dFdxFine/dFdyFine before any divergent return (they need the whole
     // quad); pixel x even (odd) has its partner at +1 (-1). The CPU twin differences against its quad partners
-    // (GlintNeighbour, glint_bsdf.h) with the same rule.
+    // (GlintNeighbour, glint_ggaa.h) with the same rule.
     bool quadDerivatives = ggaa == SPC_GLINT_GGAA_ON && derivatives == SPC_GLINT_DERIVATIVES_QUAD;
     vec2 dqx = vec2(0.0), dqy = vec2(0.0);
     bool quadValid[2] = bool[2](false, false);

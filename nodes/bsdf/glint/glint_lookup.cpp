@@ -1,16 +1,10 @@
-// Out-of-line pieces of the glint BRDF (glint_bsdf.h): the counter of EWA loops stopped by the cell cap and the
-// table of the dictionary rows' nonzero texels.
-// Everything else is inline so the node, the tests and the bench share one implementation.
-#include "nodes/bsdf/glint/glint_bsdf.h"
+// The table of the dictionary rows' nonzero MIP-0 texels (glint_lookup.h rowSupport), built once from
+// Dictionary::instance(), so a lookup that can only read zeros skips the row (spec S5.4).
+#include "nodes/bsdf/glint/glint_lookup.h"
 
 #include <vector>
 
 namespace specula::glint {
-
-std::atomic<uint64_t>& cellCapHits() {
-    static std::atomic<uint64_t> hits{0};
-    return hits;
-}
 
 const uint8_t* rowSupport(const Dictionary& dict) {
     static const std::vector<uint8_t> full = [] {
