@@ -10,8 +10,8 @@
 
 namespace specula::glint {
 
-// S0 and the half vector: h = (wo + wi) / |wo + wi|, rejected (false) unless wo.z, wi.z, |wo + wi|, h.z and wo.h are
-// > 0 (NaN passes the h.z and wo.h tests, as in glint.glsl). wi.h is returned untested: the pdf needs h where wi.h <= 0.
+// S0 and the half vector: h = (wo + wi) / |wo + wi|, rejected (false) where wo.z, wi.z or h.z <= 0, |wo + wi| is not
+// > 0, or wo.h <= 0 (a NaN h.z or wo.h is not rejected). wi.h is returned untested: the pdf needs h where wi.h <= 0.
 struct HalfVector {
     Vec3 h{0.f};
     float len = 0.f, woh = 0.f, wih = 0.f;

@@ -1,9 +1,9 @@
 // Procedural glint BRDF (Chermain et al. 2020 "C20") with geometric glint anti-aliasing and slope correlation
 // (Chermain et al. 2021 "C21"): spec glint-brdf.md §3 steps S0-S7, in float with the same operations as glint.glsl.
 // This header holds the lobe (the query against the cell set, the BRDF of C20 Eq. 14, importance sampling); the
-// ideas it is built from live in glint_params.h (inputs), glint_correlation.h (C21 Eqs. 16, 18, §5),
-// glint_counting.h (S4.1-S4.5), glint_lookup.h (S5.4), glint_cells.h (S1-S4), glint_ggaa.h (C21 §4, Eqs. 20-21),
-// glint_assembly.h (S0, S7), glint_reference.h (the per-query pipeline) and glint_area.h (quad lights).
+// ideas it is built from live in glint_dictionary.h (§2), glint_params.h (§1), glint_correlation.h (C21 Eqs. 16,
+// 18, §5), glint_counting.h (S4.1-S4.5), glint_lookup.h (S5.4), glint_cells.h (S1-S4), glint_ggaa.h (C21 §4,
+// Eqs. 20-21), glint_assembly.h (S0, S7), glint_reference.h (the per-query pipeline) and glint_area.h (quad lights).
 #pragma once
 
 #include "core/render/bsdf.h"

@@ -1,5 +1,5 @@
 // Geometric glint anti-aliasing (C21 §4): the per-pixel derivative of the half vector (C21 Eq. 21, or of the half
-// slope, Eq. 20) from the frame's and wo's screen derivatives or a 2x2-quad partner (C21 §6.1), for the kernel of Eq. 19.
+// slope, Eq. 20) from the screen derivatives of the frame and wo or a 2x2-quad partner (C21 §6.1), for Eq. 19's kernel.
 #pragma once
 
 #include "core/math/math.h"
