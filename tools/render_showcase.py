@@ -49,31 +49,34 @@ def sampled_lights(scene):
 NAIVE_PNDF_ROUGHNESS = 0.05
 
 
+def nodes_to_replace(scene, node_type):
+    """A copy of the scene, and (the material's nodes, node id, inputs) of each node of node_type in it, listed before
+    the caller replaces them and adds nodes in place."""
+    s = copy.deepcopy(scene)
+    return s, [(m["nodes"], nid, n.get("inputs", {})) for m in s["materials"].values()
+               for nid, n in list(m["nodes"].items()) if n.get("type") == node_type]
+
+
 def plain_normal_mapping(scene):
     """The naive P-NDF: every bsdf.glint_pndf becomes the same map as plain normal mapping (texture.image raw ->
     texture.normal_map) on near-mirror GGX with the same Fresnel; its tiling (uv_scale) through tiled uv nodes."""
-    s = copy.deepcopy(scene)
-    for m in s["materials"].values():
-        nodes = m["nodes"]
-        for nid, n in list(nodes.items()):
-            if n.get("type") != "bsdf.glint_pndf":
-                continue
-            inp = n.get("inputs", {})
-            tiles = inp.get("uv_scale", 1)
-            uvn, look = tiled_uv_nodes([tiles, tiles])
-            for k, v in uvn.items():
-                nodes[f"{nid}_{k}"] = {"type": v["type"], "inputs": {
-                    kk: (f"@{nid}_{vv[1:]}" if isinstance(vv, str) and vv.startswith("@") else vv)
-                    for kk, vv in v.get("inputs", {}).items()}}
-            wire = {k: f"@{nid}_{v[1:]}" for k, v in look.items()}
-            nodes[f"{nid}_img"] = {"type": "texture.image", "inputs": dict(file=inp["normal_map"], colorspace="raw",
-                                                                          **wire)}
-            nodes[f"{nid}_nm"] = {"type": "texture.normal_map", "inputs": {"color": f"@{nid}_img.color"}}
-            ggx = {"roughness": NAIVE_PNDF_ROUGHNESS, "normal": f"@{nid}_nm.normal"}
-            for k in ("weight", "fresnel", "f0", "ior", "eta", "k"):
-                if k in inp:
-                    ggx[k] = inp[k]
-            nodes[nid] = {"type": "bsdf.ggx", "inputs": ggx}
+    s, found = nodes_to_replace(scene, "bsdf.glint_pndf")
+    for nodes, nid, inp in found:
+        tiles = inp.get("uv_scale", 1)
+        uvn, look = tiled_uv_nodes([tiles, tiles])
+        for k, v in uvn.items():
+            nodes[f"{nid}_{k}"] = {"type": v["type"], "inputs": {
+                kk: (f"@{nid}_{vv[1:]}" if isinstance(vv, str) and vv.startswith("@") else vv)
+                for kk, vv in v.get("inputs", {}).items()}}
+        wire = {k: f"@{nid}_{v[1:]}" for k, v in look.items()}
+        nodes[f"{nid}_img"] = {"type": "texture.image", "inputs": dict(file=inp["normal_map"], colorspace="raw",
+                                                                      **wire)}
+        nodes[f"{nid}_nm"] = {"type": "texture.normal_map", "inputs": {"color": f"@{nid}_img.color"}}
+        ggx = {"roughness": NAIVE_PNDF_ROUGHNESS, "normal": f"@{nid}_nm.normal"}
+        for k in ("weight", "fresnel", "f0", "ior", "eta", "k"):
+            if k in inp:
+                ggx[k] = inp[k]
+        nodes[nid] = {"type": "bsdf.ggx", "inputs": ggx}
     return s
 
 
@@ -85,22 +88,17 @@ def unfiltered_ggx(scene):
 def mip_normals(scene):
     """The naive LEAN mapping: every texture.lean becomes the same map read as MIP-filtered normals (texture.image raw,
     same uv and footprint -> texture.normal_map), which feeds the lobe's normal; the lobe loses the slope moments."""
-    s = copy.deepcopy(scene)
-    for m in s["materials"].values():
-        nodes = m["nodes"]
-        for nid, n in list(nodes.items()):
-            if n.get("type") != "texture.lean":
-                continue
-            inp = n.get("inputs", {})
-            look = {k: inp[k] for k in ("uv", "duvdx", "duvdy") if k in inp}
-            nodes[nid] = {"type": "texture.image", "inputs": dict(file=inp["file"], colorspace="raw", **look)}
-            nodes[f"{nid}_nm"] = {"type": "texture.normal_map", "inputs": {"color": f"@{nid}.color"}}
-            for other in nodes.values():
-                oin = other.get("inputs", {})
-                if oin.get("slope") == f"@{nid}.slope" or oin.get("covariance") == f"@{nid}.covariance":
-                    oin.pop("slope", None)
-                    oin.pop("covariance", None)
-                    oin["normal"] = f"@{nid}_nm.normal"
+    s, found = nodes_to_replace(scene, "texture.lean")
+    for nodes, nid, inp in found:
+        look = {k: inp[k] for k in ("uv", "duvdx", "duvdy") if k in inp}
+        nodes[nid] = {"type": "texture.image", "inputs": dict(file=inp["file"], colorspace="raw", **look)}
+        nodes[f"{nid}_nm"] = {"type": "texture.normal_map", "inputs": {"color": f"@{nid}.color"}}
+        for other in nodes.values():
+            oin = other.get("inputs", {})
+            if oin.get("slope") == f"@{nid}.slope" or oin.get("covariance") == f"@{nid}.covariance":
+                oin.pop("slope", None)
+                oin.pop("covariance", None)
+                oin["normal"] = f"@{nid}_nm.normal"
     return s
 
 

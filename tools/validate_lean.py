@@ -17,7 +17,7 @@ import shlex
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from specula_validation import metrics  # noqa: E402
+from specula_validation import metrics, page  # noqa: E402
 from specula_validation.render import Renderer, run_logged, tiled_uv_nodes  # noqa: E402
 
 MAP_SIZE = 256
@@ -182,12 +182,8 @@ def write_page(a, rows, sweeps, w, h, ref_spp, log):
     p("```\ncmake --build build --target specula -j2\npython3 tools/validate_lean.py --specula build/bin/specula   # ~10 min on 2 cores\n```\n")
     p("The CI check is `tests/unit/test_lean_validation.cpp` (ctest `LeanValidation.DistanceSweepOnPlane`, label cpu),")
     p("whose RMSE is the code of `specula compare --mask all` (plugin/cli/validation_metrics.cpp).\n")
-    p("Commands run for this page:\n")
-    p("```")
-    L.extend(log)
-    p("```")
     with open(os.path.join(a.docs, "lean.md"), "w") as f:
-        f.write("\n".join(L) + "\n")
+        f.write(page.with_command_log(L, log))
 
 
 if __name__ == "__main__":

@@ -16,7 +16,7 @@ import sys
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from specula_validation import metrics  # noqa: E402
+from specula_validation import metrics, page  # noqa: E402
 from specula_validation.render import Renderer, run_logged, tiled_uv_nodes  # noqa: E402
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
@@ -331,12 +331,8 @@ def write_page(a, acc, sh, th, pf, log):
     p("- FLIP is not computed (RMSE/MAE only, validation.md); flicker is not measured here.\n")
     p("## How to regenerate\n")
     p("```\ncmake --build build -j2\npython3 tools/validate_ltc.py --build build   # about 15 min on 2 cores\n```\n")
-    p("Commands run for this page:\n")
-    p("```")
-    L.extend(log)
-    p("```")
     with open(os.path.join(a.docs, "ltc.md"), "w") as f:
-        f.write("\n".join(L) + "\n")
+        f.write(page.with_command_log(L, log))
 
 
 def main():

@@ -24,7 +24,7 @@ import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from specula_validation import exr, metrics, ratio, rel  # noqa: E402
-from specula_validation.page import Canvas, colorbar, errmap, percentile, tonemap  # noqa: E402
+from specula_validation.page import Canvas, colorbar, errmap, percentile, tonemap, with_command_log  # noqa: E402
 from specula_validation.render import Renderer, specula_version, tiled_uv_nodes  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -393,11 +393,7 @@ def write_page(R):
     p("tiled twice (the page's texel density), bumps and brushed, reference normal mapping at 1024 spp. Measured")
     p("P-NDF/normal-mapping RMSE ratio at 64 spp 0.692 (bumps) and 0.573 (brushed), asserted ≤ 0.85 and ≤ 0.75;")
     p("bumps P-NDF 64 spp / 256 spp 1.039, asserted ≤ 1.2. Parameters are kept in sync with this tool by hand.\n")
-    p("Commands run for this page (renders were run under `nice -n 10`):\n")
-    p("```")
-    L.extend(R["log"])
-    p("```")
-    text = "\n".join(L) + "\n"
+    text = with_command_log(L, R["log"], "Commands run for this page (renders were run under `nice -n 10`):\n")
     if os.path.exists(DOC):  # keep the hand-written findings block
         old = open(DOC).read()
         if FINDINGS_BEGIN in old and FINDINGS_END in old:

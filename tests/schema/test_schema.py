@@ -440,31 +440,25 @@ def main():
                                     f" (only in loader: {sorted(loader - ours)}, only in schema: {sorted(ours - loader)})")
             check(ok, f"enum/{label}: schema enum = loader's values" + detail)
 
-        for name, doc, ptr in INVALID:
-            path = os.path.join(tmp, f"invalid_{name}.json")
+        def refused_by_loader(label, name, doc, ptr):
+            """Writes doc, checks `specula info` refuses it at ptr; returns the schema's best error (None: accepted)."""
+            path = os.path.join(tmp, f"{label.replace('-', '_')}_{name}.json")
             with open(path, "w") as f:
                 json.dump(doc, f, indent=1)
-            err = best_match(validator.iter_errors(doc))
+            rc, msg = run_info(specula, path, env)
+            ok = rc == 1 and msg.startswith(f"specula: error: {ptr}: ")
+            check(ok, f"{label}/{name}: specula info exits 1 at {ptr}" + ("" if ok else f" (got exit {rc}: {msg})"))
+            return best_match(validator.iter_errors(doc))
+
+        for name, doc, ptr in INVALID:
+            err = refused_by_loader("invalid", name, doc, ptr)
             check(err is not None, f"invalid/{name}: schema rejects" +
                   (f" at {pointer(err.absolute_path)}: {err.message}" if err is not None else " (but it was accepted)"))
-            rc, msg = run_info(specula, path, env)
-            prefix = f"specula: error: {ptr}: "
-            ok = rc == 1 and msg.startswith(prefix)
-            check(ok, f"invalid/{name}: specula info exits 1 at {ptr}" +
-                  ("" if ok else f" (got exit {rc}: {msg})"))
 
         for name, doc, ptr in LOADER_ONLY:
-            path = os.path.join(tmp, f"loader_only_{name}.json")
-            with open(path, "w") as f:
-                json.dump(doc, f, indent=1)
-            err = best_match(validator.iter_errors(doc))
+            err = refused_by_loader("loader-only", name, doc, ptr)
             check(err is None, f"loader-only/{name}: schema accepts (the loader alone checks this)" +
                   (f" (but it rejects at {pointer(err.absolute_path)}: {err.message})" if err is not None else ""))
-            rc, msg = run_info(specula, path, env)
-            prefix = f"specula: error: {ptr}: "
-            ok = rc == 1 and msg.startswith(prefix)
-            check(ok, f"loader-only/{name}: specula info exits 1 at {ptr}" +
-                  ("" if ok else f" (got exit {rc}: {msg})"))
 
     print(f"{PASSED} passed, {FAILED} failed")
     return 0 if FAILED == 0 else 1

@@ -1,10 +1,12 @@
 // Helpers shared by the shading and render tests: a shading point with ray differentials, rendering one AOV of a
-// scene, and the image statistics the render tests compare (header-only, so only the tests that use it rebuild).
+// scene, and the image statistics the render and validation tests compare (header-only, so only the tests that use
+// it rebuild).
 #pragma once
 
 #include "core/render/renderer.h"
 #include "core/render/shading.h"
 #include "core/scene/scene_loader.h"
+#include "plugin/cli/validation_metrics.h"
 
 #include <cmath>
 #include <stdexcept>
@@ -45,6 +47,32 @@ inline std::vector<float> renderAov(const std::string& sceneText, const std::str
     const AovBuffer* a = r.images.find(aov);
     if (!a) throw std::runtime_error("no " + aov + " AOV");
     return a->pixels;
+}
+
+// The specular AOV of a scene, as the validation tests compare it.
+inline std::vector<float> specularAov(const std::string& sceneText, const std::string& baseDir) {
+    return renderAov(sceneText, baseDir, "specular");
+}
+
+// RMSE over every pixel and channel of two RGB images: the code of `specula compare --mask all`.
+inline double compareRmse(const std::vector<float>& a, const std::vector<float>& b) {
+    return maskedError(a, b, 3).rmse;
+}
+
+// The mean green value of the pixels of a size x size RGB image whose centres lie at a distance in (r0, r1) from the
+// image centre (the furnace tests' disc and ring of a centred sphere); *count: how many pixels that is.
+inline double greenMeanInRing(const std::vector<float>& rgb, int size, double r0, double r1, int* count) {
+    double sum = 0;
+    int n = 0;
+    for (int y = 0; y < size; ++y)
+        for (int x = 0; x < size; ++x) {
+            const double d = std::hypot(x + 0.5 - size / 2.0, y + 0.5 - size / 2.0);
+            if (d <= r0 || d >= r1) continue;
+            sum += rgb[(size_t(y) * size + x) * 3 + 1];
+            ++n;
+        }
+    *count = n;
+    return sum / n;
 }
 
 // Root mean square of a - b over every element (a double sum in element order).

@@ -11,6 +11,7 @@
 #include "core/render/sampler.h"
 #include "core/render/shading.h"
 #include "core/scene/scene_loader.h"
+#include "render_support.h"
 #include "test_support.h"
 
 #include <gtest/gtest.h>
@@ -123,27 +124,17 @@ TEST(Dielectric, GlassSphereVanishesInAConstantEnvironment) {
     // environment's radiance: entering multiplies radiance by η², leaving by 1/η²; a wrong factor or a wrong IOR inside
     // shows as a bright or dark disc. What is lost: single-scattering energy (small at this roughness) and paths cut at
     // max_depth.
-    Scene scene = loadSceneFromString(R"({
+    const std::vector<float> beauty = test::renderAov(R"({
         "render": {"width": 40, "height": 40, "spp": 64, "integrator": "path", "max_depth": 24},
         "camera": {"position": [0, -4, 0], "look_at": [0, 0, 0], "fov": 25},
         "materials": {"glass": {"nodes": {"g": {"type": "bsdf.dielectric", "inputs": {"roughness": 0.1, "ior": 1.5}}},
                                 "output": "@g.bsdf"}},
         "shapes": [{"type": "sphere", "radius": 1, "material": "glass"}],
         "lights": [{"type": "environment", "color": [0.5, 0.5, 0.5]}]})",
-                                      test::sourcePath("examples"));
-    RenderOutput r = renderScene(scene);
-    const AovBuffer* beauty = r.images.find("beauty");
-    ASSERT_TRUE(beauty);
-    double sum = 0;
+                                                      test::sourcePath("examples"), "beauty");
+    // Pixels well inside the disc (its radius is about 18 pixels).
     int n = 0;
-    for (int y = 0; y < 40; ++y)
-        for (int x = 0; x < 40; ++x) {
-            // Pixels well inside the disc (its radius is about 18 pixels).
-            if (std::hypot(x + 0.5 - 20, y + 0.5 - 20) > 14) continue;
-            sum += beauty->pixels[size_t(y * 40 + x) * 3 + 1];
-            ++n;
-        }
-    const double mean = sum / n / 0.5;
+    const double mean = test::greenMeanInRing(beauty, 40, -1.0, 14.0, &n) / 0.5;
     std::printf("  glass sphere in a furnace: %.4f of the environment over %d pixels\n", mean, n);
     ASSERT_GT(n, 500);
     EXPECT_GT(mean, 0.95);

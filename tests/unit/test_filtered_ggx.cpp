@@ -89,6 +89,12 @@ double projectedIntegral(const Sym2& A, double tau, int nx = 1500, int nphi = 19
     return sum;
 }
 
+// A diagonal A = diag(αx², αy²) with αx, αy uniform in [lo, hi) (αx drawn first).
+Sym2 randDiagonal(double lo, double hi) {
+    const double ax = uni(lo, hi), ay = uni(lo, hi);
+    return Sym2::diag(ax * ax, ay * ay);
+}
+
 FilterParams params(Filter f, Kernel k) {
     FilterParams p;
     p.filter = f;
@@ -145,9 +151,8 @@ TEST(FilteredGgxMath, ZeroDerivativesReproduceUnfilteredExactly) {
     for (Filter f : kAllFilters)
         for (Kernel k : {Kernel::Full, Kernel::AxisAligned})
             for (int it = 0; it < 50; ++it) {
-                double ax = uni(0.01, 0.5), ay = uni(0.01, 0.5);
                 LobeSetup s;
-                s.A = Sym2::diag(ax * ax, ay * ay);
+                s.A = randDiagonal(0.01, 0.5);
                 s.diff.valid = true;  // all derivatives zero
                 s.params = params(f, k);
                 FilteredGgxLobe lobe(s, fr);
@@ -173,9 +178,8 @@ TEST(FilteredGgxMath, FilteredMatricesAreNormalisedAndNeverSharper) {
     for (Filter f : kAllFilters)
         for (Kernel k : {Kernel::Full, Kernel::AxisAligned})
             for (int it = 0; it < 6; ++it) {
-                double ax = uni(0.01, 0.3), ay = uni(0.01, 0.3);
                 LobeSetup s;
-                s.A = Sym2::diag(ax * ax, ay * ay);
+                s.A = randDiagonal(0.01, 0.3);
                 s.diff = randDiff(uni(0.001, 0.2));
                 s.params = params(f, k);
                 FilteredGgxLobe lobe(s, Fresnel::one());
@@ -569,8 +573,7 @@ TEST(FilteredGgxMath, FastEvaluationEqualsLongDoubleReference) {
                 if (it % 3 == 0) {
                     s.A = randSpd(1e-6, 0.6);
                 } else {
-                    const double ax = uni(0.003, 0.9), ay = uni(0.003, 0.9);
-                    s.A = Sym2::diag(ax * ax, ay * ay);
+                    s.A = randDiagonal(0.003, 0.9);
                 }
                 s.diff = randDiff(uni(0.0, 0.1));
                 s.params = params(f, k);

@@ -3,7 +3,6 @@
 // full-resolution map, for naive MIP-filtered normals, LEAN without ρ and LEAN with ρ; asserts the measured ratios.
 #include "core/api/specula.h"
 #include "core/texture/normal_map_gen.h"
-#include "plugin/cli/validation_metrics.h"
 #include "render_support.h"
 #include "test_support.h"
 
@@ -15,6 +14,8 @@
 #include <sstream>
 
 using namespace specula;
+using test::compareRmse;
+using test::specularAov;
 
 namespace {
 
@@ -61,13 +62,6 @@ std::string scene(const std::string& method, const std::string& map, float d, in
     return s.str();
 }
 
-std::vector<float> specular(const std::string& text, const std::string& dir) {
-    return test::renderAov(text, dir, "specular");
-}
-
-// RMSE over every pixel and channel of the specular AOV: the code of `specula compare --mask all`.
-double rmse(const std::vector<float>& a, const std::vector<float>& b) { return maskedError(a, b, 3).rmse; }
-
 }  // namespace
 
 TEST(LeanValidation, DistanceSweepOnPlane) {
@@ -83,9 +77,9 @@ TEST(LeanValidation, DistanceSweepOnPlane) {
     for (const char* kind : {"bumps", "brushed"}) {
         std::string map = std::string(kind) + ".exr";
         for (float d : distances) {
-            std::vector<float> ref = specular(scene("reference", map, d, w, h, refSpp), dir);
+            std::vector<float> ref = specularAov(scene("reference", map, d, w, h, refSpp), dir);
             for (const char* method : {"naive", "lean_norho", "lean"})
-                err[kind][d][method] = rmse(specular(scene(method, map, d, w, h, 1), dir), ref);
+                err[kind][d][method] = compareRmse(specularAov(scene(method, map, d, w, h, 1), dir), ref);
             double texels = 2 * d * std::tan(20.0 * 3.14159265358979 / 180) / w * kMapSize * kTiles / 64;
             std::printf("  %-8s %-5.1f %-10.1f %-10.4g %-10.4g %-10.4g\n", kind, d, texels, err[kind][d]["naive"],
                         err[kind][d]["lean_norho"], err[kind][d]["lean"]);

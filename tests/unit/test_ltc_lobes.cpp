@@ -39,67 +39,63 @@ double uniform(uint64_t& s) { return ltc::nextUniform(s); }
 
 const ltc::LtcTables& tables() { return ltc::builtinTables(); }
 
+// measureQuadErrors over perBand random lobes per view band from makeLobe (100,000 MC samples per quad), printed.
+template <class MakeLobe>
+ltc::BandErrors measured(const char* name, int perBand, uint64_t seed, MakeLobe makeLobe) {
+    ltc::BandErrors s = ltc::measureQuadErrors(makeLobe, perBand, 100000, seed);
+    report(name, s);
+    return s;
+}
+
 }  // namespace
 
 TEST(LtcLobes, IsotropicGgxMeetsT6) {
-    auto s = ltc::measureQuadErrors(
-        [](uint64_t& r, const Vec3& wo) {
-            float a = float(std::pow(0.25 + 0.75 * uniform(r), 2.0));
-            LobeUnderTest c{std::make_unique<GgxLobe>(a, a, Fresnel::one())};
-            c.albedo = ltc::ggxIsotropic(tables(), a, wo).magnitude;
-            return c;
-        },
-        40, 100000, 1);
-    report("ggx isotropic", s);
+    const ltc::BandErrors s = measured("ggx isotropic", 40, 1, [](uint64_t& r, const Vec3& wo) {
+        float a = float(std::pow(0.25 + 0.75 * uniform(r), 2.0));
+        LobeUnderTest c{std::make_unique<GgxLobe>(a, a, Fresnel::one())};
+        c.albedo = ltc::ggxIsotropic(tables(), a, wo).magnitude;
+        return c;
+    });
     expectT6(s);
 }
 
 TEST(LtcLobes, SchlickFresnelThroughTheFresTableMeetsT6) {
     // F0·mag + (1 − F0)·fres is exact for Schlick (ltc_code 2017): the same limits with a dielectric-like F0.
-    auto s = ltc::measureQuadErrors(
-        [](uint64_t& r, const Vec3& wo) {
-            float a = float(std::pow(0.25 + 0.75 * uniform(r), 2.0));
-            Fresnel f = Fresnel::schlick(Color3(0.04f, 0.3f, 0.9f));
-            LobeUnderTest c{std::make_unique<GgxLobe>(a, a, f)};
-            c.albedo = ltc::fresnelScale(f, ltc::ggxIsotropic(tables(), a, wo)).y;
-            return c;
-        },
-        16, 100000, 2);
-    report("ggx schlick F0 0.3", s);
+    const ltc::BandErrors s = measured("ggx schlick F0 0.3", 16, 2, [](uint64_t& r, const Vec3& wo) {
+        float a = float(std::pow(0.25 + 0.75 * uniform(r), 2.0));
+        Fresnel f = Fresnel::schlick(Color3(0.04f, 0.3f, 0.9f));
+        LobeUnderTest c{std::make_unique<GgxLobe>(a, a, f)};
+        c.albedo = ltc::fresnelScale(f, ltc::ggxIsotropic(tables(), a, wo)).y;
+        return c;
+    });
     expectT6(s);
 }
 
 TEST(LtcLobes, AnisotropicGgxMeetsT6Means) {
     // The t-EM anisotropic table (docs/ltc-tables.md). Its median relative errors are reported, not asserted: the
     // 8^4 grid interpolates matrices across roughness ratios, where the spec's limits are for the 64×64 table.
-    auto s = ltc::measureQuadErrors(
-        [](uint64_t& r, const Vec3& wo) {
-            float ax = float(std::pow(0.3 + 0.7 * uniform(r), 2.0)), ay = float(std::pow(0.3 + 0.7 * uniform(r), 2.0));
-            LobeUnderTest c{std::make_unique<GgxLobe>(ax, ay, Fresnel::one())};
-            c.albedo = ltc::ggxRoughnessMatrix(tables(), ax * ax, 0, ay * ay, wo).magnitude;
-            return c;
-        },
-        16, 100000, 3);
-    report("ggx anisotropic", s);
+    const ltc::BandErrors s = measured("ggx anisotropic", 16, 3, [](uint64_t& r, const Vec3& wo) {
+        float ax = float(std::pow(0.3 + 0.7 * uniform(r), 2.0)), ay = float(std::pow(0.3 + 0.7 * uniform(r), 2.0));
+        LobeUnderTest c{std::make_unique<GgxLobe>(ax, ay, Fresnel::one())};
+        c.albedo = ltc::ggxRoughnessMatrix(tables(), ax * ax, 0, ay * ay, wo).magnitude;
+        return c;
+    });
     expectT6Means(s, 2.0);
 }
 
 TEST(LtcLobes, FilteredGgxRoughnessMatrixUsesItsPrincipalAxes) {
     // A rotated anisotropic roughness matrix (no filter): the LTC rotated into the eigenvectors equals the MC of the
     // filtered lobe as closely as the axis-aligned anisotropic lobe does.
-    auto s = ltc::measureQuadErrors(
-        [](uint64_t& r, const Vec3& wo) {
-            double ax = std::pow(0.3 + 0.7 * uniform(r), 2.0), ay = std::pow(0.3 + 0.7 * uniform(r), 2.0);
-            double phi = M_PI * uniform(r), cs = std::cos(phi), sn = std::sin(phi);
-            fggx::LobeSetup setup;
-            setup.A = {cs * cs * ax * ax + sn * sn * ay * ay, cs * sn * (ax * ax - ay * ay), sn * sn * ax * ax + cs * cs * ay * ay};
-            setup.params.filter = fggx::Filter::None;
-            LobeUnderTest c{std::make_unique<fggx::FilteredGgxLobe>(setup, Fresnel::one())};
-            c.albedo = ltc::ggxRoughnessMatrix(tables(), setup.A.a, setup.A.c, setup.A.d, wo).magnitude;
-            return c;
-        },
-        16, 100000, 4);
-    report("ggx_filtered rotated matrix", s);
+    const ltc::BandErrors s = measured("ggx_filtered rotated matrix", 16, 4, [](uint64_t& r, const Vec3& wo) {
+        double ax = std::pow(0.3 + 0.7 * uniform(r), 2.0), ay = std::pow(0.3 + 0.7 * uniform(r), 2.0);
+        double phi = M_PI * uniform(r), cs = std::cos(phi), sn = std::sin(phi);
+        fggx::LobeSetup setup;
+        setup.A = {cs * cs * ax * ax + sn * sn * ay * ay, cs * sn * (ax * ax - ay * ay), sn * sn * ax * ax + cs * cs * ay * ay};
+        setup.params.filter = fggx::Filter::None;
+        LobeUnderTest c{std::make_unique<fggx::FilteredGgxLobe>(setup, Fresnel::one())};
+        c.albedo = ltc::ggxRoughnessMatrix(tables(), setup.A.a, setup.A.c, setup.A.d, wo).magnitude;
+        return c;
+    });
     expectT6Means(s, 2.0);
 }
 
@@ -107,19 +103,16 @@ TEST(LtcLobes, BeckmannLeanEquivalentGgxErrorIsMeasured) {
     // The equivalent-GGX mapping (tilted mean normal, α² = 1.5Σ) approximates a different microfacet model (Beckmann
     // slopes, mean-plane masking) by GGX: the error is that model gap, not a fit error. Measured (2026-12-01) mean
     // |err|/albedo 0.031 / 0.016 / 0.093 by band; bounds 0.04 / 0.025 / 0.12.
-    auto s = ltc::measureQuadErrors(
-        [](uint64_t& r, const Vec3& wo) {
-            Vec2 mean(float(0.3 * (uniform(r) - 0.5)), float(0.3 * (uniform(r) - 0.5)));
-            Vec3 cov(float(0.02 * uniform(r)), float(0.02 * uniform(r)), 0.f);
-            float alpha = float(0.2 + 0.6 * uniform(r));
-            lean::SlopeGaussian g = lean::makeSlopeGaussian(mean, cov, alpha);
-            auto lobe = std::make_unique<BeckmannLeanLobe>(g, Fresnel::one());
-            LobeUnderTest c{std::move(lobe)};
-            c.albedo = static_cast<BeckmannLeanLobe*>(c.lobe.get())->polygonLtc(wo).magnitude;
-            return c;
-        },
-        16, 100000, 5);
-    report("beckmann_lean (equivalent)", s);
+    const ltc::BandErrors s = measured("beckmann_lean (equivalent)", 16, 5, [](uint64_t& r, const Vec3& wo) {
+        Vec2 mean(float(0.3 * (uniform(r) - 0.5)), float(0.3 * (uniform(r) - 0.5)));
+        Vec3 cov(float(0.02 * uniform(r)), float(0.02 * uniform(r)), 0.f);
+        float alpha = float(0.2 + 0.6 * uniform(r));
+        lean::SlopeGaussian g = lean::makeSlopeGaussian(mean, cov, alpha);
+        auto lobe = std::make_unique<BeckmannLeanLobe>(g, Fresnel::one());
+        LobeUnderTest c{std::move(lobe)};
+        c.albedo = static_cast<BeckmannLeanLobe*>(c.lobe.get())->polygonLtc(wo).magnitude;
+        return c;
+    });
     EXPECT_LE(s.meanAbs(0), 0.04);
     EXPECT_LE(s.meanAbs(1), 0.025);
     EXPECT_LE(s.meanAbs(2), 0.12);

@@ -8,7 +8,6 @@
 // map seed, seeds of reference and tests); this test is smaller: 64 x 48, 256² maps tiled twice (the page's texel
 // density), 1024-spp reference, maps bumps and brushed.
 #include "core/api/specula.h"
-#include "plugin/cli/validation_metrics.h"
 #include "render_support.h"
 #include "test_support.h"
 
@@ -20,6 +19,8 @@
 #include <vector>
 
 using namespace specula;
+using test::compareRmse;
+using test::specularAov;
 
 namespace {
 
@@ -79,13 +80,6 @@ std::string scene(bool pndf, const std::string& kind, int spp, int seed, bool pi
     return s.str();
 }
 
-std::vector<float> specular(const std::string& text, const std::string& dir) {
-    return test::renderAov(text, dir, "specular");
-}
-
-// RMSE over every pixel and channel of the specular AOV: the code of `specula compare --mask all`.
-double rmse(const std::vector<float>& a, const std::vector<float>& b) { return maskedError(a, b, 3).rmse; }
-
 }  // namespace
 
 TEST(PndfValidation, SixtyFourSppAgainstNormalMapping) {
@@ -93,12 +87,12 @@ TEST(PndfValidation, SixtyFourSppAgainstNormalMapping) {
     std::printf("  map      nm64       pndf64     pndf256    ratio pndf/nm  pndf64/pndf256  (RMSE, specular AOV)\n");
     for (const char* kind : {"bumps", "brushed"}) {
         const bool bumps = std::string(kind) == "bumps";
-        std::vector<float> ref = specular(scene(false, kind, kRefSpp, kRefSeed), dir);
-        double nm = rmse(specular(scene(false, kind, kSpp, kTestSeed), dir), ref);
-        double p64 = rmse(specular(scene(true, kind, kSpp, kTestSeed), dir), ref);
+        std::vector<float> ref = specularAov(scene(false, kind, kRefSpp, kRefSeed), dir);
+        double nm = compareRmse(specularAov(scene(false, kind, kSpp, kTestSeed), dir), ref);
+        double p64 = compareRmse(specularAov(scene(true, kind, kSpp, kTestSeed), dir), ref);
         // The bias-floor check on bumps only: brushed P-NDF at 256 spp costs ~35 s on 2 cores.
-        double p256 = bumps ? rmse(specular(scene(true, kind, kHiSpp, kTestSeed), dir), ref) : 0.0;
-        double pPix = rmse(specular(scene(true, kind, kSpp, kTestSeed, true), dir), ref);
+        double p256 = bumps ? compareRmse(specularAov(scene(true, kind, kHiSpp, kTestSeed), dir), ref) : 0.0;
+        double pPix = compareRmse(specularAov(scene(true, kind, kSpp, kTestSeed, true), dir), ref);
         std::printf("  %-8s %-10.4g %-10.4g %-10.4g %-14.3f %-10.3f\n", kind, nm, p64, p256, p64 / nm,
                     bumps ? p64 / p256 : 0.0);
         std::printf("  %-8s pixel-centred box k 1: RMSE %.4g, ratio vs normal mapping %.3f, vs the default %.3f\n", kind,

@@ -106,6 +106,11 @@ def table(header, rows):
         ["| " + " | ".join(str(c) for c in r) + " |" for r in rows]
 
 
+def with_command_log(lines, log, intro="Commands run for this page:\n"):
+    """A page's text: its lines, then the commands that made it (intro, then the log in a code block)."""
+    return "\n".join(list(lines) + [intro, "```"] + list(log) + ["```"]) + "\n"
+
+
 def replace_block(text, begin, end, body):
     """Replaces what lies between the marker lines 'begin' and 'end' (kept) of a page with 'body'."""
     if begin not in text or end not in text:
