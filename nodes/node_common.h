@@ -1,11 +1,15 @@
-// Shared helpers for node files: typed-variant registration (one file registers e.g. math.add.float,
-// math.add.vec2, math.add.color3, math.add.vector3) and component-wise CPU kernels by width.
+// Shared helpers for node files: the declaration every node starts from (declareNode), typed-variant registration
+// (one file registers e.g. math.add.float, math.add.vec2, math.add.color3, math.add.vector3), component-wise CPU
+// kernels by width, and the one-statement registration of a node and of a category's notes.
 #pragma once
 
 #include "core/graph/node_params.h"
 #include "core/graph/node_spec.h"
 
+#include <functional>
 #include <string>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 namespace specula::nodes {
@@ -19,6 +23,47 @@ inline const std::vector<TypeDesc>& mathTypes() {
 inline const std::vector<TypeDesc>& vectorTypes() {
     static const std::vector<TypeDesc> t = {TypeDesc::Vec2, TypeDesc::Vector3};
     return t;
+}
+
+// The declaration every node starts from, named by its id "<category>.<name>": the category, the doc, and the GLSL
+// function spc_<category>_<name> in nodes/<category>/<name>/<name>.glsl (the folder layout of docs/contributing.md).
+inline NodeSpec declareNode(const std::string& id, std::string doc) {
+    const size_t dot = id.find('.');
+    const std::string category = id.substr(0, dot), name = id.substr(dot + 1);
+    NodeSpec s;
+    s.id = id;
+    s.category = category;
+    s.doc = std::move(doc);
+    s.glslFunction = "spc_" + category + "_" + name;
+    s.glslFile = category + "/" + name + "/" + name + ".glsl";
+    return s;
+}
+// ... with the parts most nodes have: the parameter struct (its ports are the inputs), the outputs, the CPU entry.
+template <class P>
+NodeSpec declareNode(const std::string& id, std::string doc, const NodeParams<P>& params, const OutputList& outputs,
+                     CpuFn cpu, uint32_t flags = 0) {
+    NodeSpec s = declareNode(id, std::move(doc));
+    params.describe(s);
+    s.outputs = outputs.ports();
+    s.cpu = cpu;
+    s.flags = flags;
+    return s;
+}
+// ... for a node without inputs whose outputs are listed in order (e.g. a geometry node: see setOutputs).
+inline NodeSpec declareNode(const std::string& id, std::string doc, std::vector<PortSpec> outputs, CpuFn cpu,
+                            uint32_t flags = 0) {
+    NodeSpec s = declareNode(id, std::move(doc));
+    s.outputs = std::move(outputs);
+    s.cpu = cpu;
+    s.flags = flags;
+    return s;
+}
+
+// Writes the node's outputs in declaration order, one value each (float, Vec2 or Vec3 of the port's width).
+template <class... T>
+inline void setOutputs(EvalContext& c, const Instr& i, const T&... values) {
+    uint8_t k = 0;
+    (set(c, i, OutPort<T>{k++}, values), ...);
 }
 
 // The canonical port type of a register width (reading lists of width-generic families are built with it).
@@ -89,10 +134,11 @@ struct Binary {
 };
 
 
-// Registers "<family>.<name>.<type>" for every type in 'types'; 'fill' sets ports/cpu per type.
+// The declarations "<family>.<name>.<type>" for every type in 'types'; 'fill' sets ports/cpu per type.
 template <class Fill>
-void registerTyped(NodeRegistry& reg, const std::string& family, const std::string& name,
-                   const std::vector<TypeDesc>& types, const std::string& doc, Fill fill) {
+std::vector<NodeSpec> typedNodes(const std::string& family, const std::string& name, const std::vector<TypeDesc>& types,
+                                 const std::string& doc, Fill fill) {
+    std::vector<NodeSpec> specs;
     for (TypeDesc t : types) {
         NodeSpec s;
         s.id = family + "." + name + "." + typeName(t);
@@ -102,8 +148,94 @@ void registerTyped(NodeRegistry& reg, const std::string& family, const std::stri
         s.glslFunction = "spc_" + family + "_" + name;
         s.glslFile = family + "/" + name + "/" + name + ".glsl";
         fill(s, t);
-        reg.add(std::move(s));
+        specs.push_back(std::move(s));
     }
+    return specs;
+}
+
+// The CPU entries of a width-generic family by register width (1, 2 or 3 floats).
+struct WidthKernels {
+    CpuFn w1, w2, w3;
+    CpuFn of(TypeDesc t) const {
+        switch (typeWidth(t)) {
+            case 1: return w1;
+            case 2: return w2;
+            default: return w3;
+        }
+    }
+};
+
+// math.<name>.<type> for every type: inputs ports(type), the output "out" (a float where 'scalarOut', else of the
+// variant's type) and the CPU entry of the type's width.
+inline std::vector<NodeSpec> widthFamily(const std::string& name, const std::vector<TypeDesc>& types,
+                                         const std::string& doc, const std::string& outDoc, bool scalarOut,
+                                         const std::function<std::vector<PortSpec>(TypeDesc)>& ports,
+                                         const WidthKernels& kernels) {
+    return typedNodes("math", name, types, doc, [&](NodeSpec& s, TypeDesc t) {
+        s.inputs = ports(t);
+        s.outputs = {PortSpec::out("out", scalarOut ? TypeDesc::Float : t, outDoc)};
+        s.cpu = kernels.of(t);
+    });
+}
+
+// A family F (a struct in the node file's unnamed namespace) whose F::Args<W> declares its ports (declare(type)) and
+// computes the single output (eval(): a float, or FloatN<W> of the variant's type). F is a type, not a template
+// template argument: GCC 12 gives templates instantiated with an unnamed-namespace class template as a template
+// template argument vague linkage, so two node files' families with the same name would be merged by the linker.
+template <class F>
+struct FamilyKernel {
+    template <int W>
+    static void run(EvalContext& c, const Instr& i) {
+        using Args = typename F::template Args<W>;
+        static const NodeParams<Args> kIn = Args::declare(widthType<W>());
+        setSingleOutput(c, i, kIn.read(c, i).eval());
+    }
+};
+template <class F>
+std::vector<NodeSpec> mathNodes(const std::string& name, const std::vector<TypeDesc>& types, const std::string& doc,
+                                const std::string& outDoc) {
+    constexpr bool scalarOut = std::is_same_v<decltype(std::declval<const typename F::template Args<2>&>().eval()), float>;
+    auto ports = [](TypeDesc t) {
+        switch (typeWidth(t)) {
+            case 1: return F::template Args<1>::declare(t).ports();
+            case 2: return F::template Args<2>::declare(t).ports();
+            default: return F::template Args<3>::declare(t).ports();
+        }
+    };
+    return widthFamily(name, types, doc, outDoc, scalarOut, ports,
+                       {&FamilyKernel<F>::template run<1>, &FamilyKernel<F>::template run<2>,
+                        &FamilyKernel<F>::template run<3>});
+}
+// ... of a binary component-wise operation over every math type (math.add, sub, mul, div, pow).
+template <float (*Op)(float, float)>
+std::vector<NodeSpec> binaryMath(const std::string& name, const std::string& doc, const std::string& outDoc,
+                                 const OperandDoc& a, const OperandDoc& b) {
+    auto ports = [&](TypeDesc t) { return portsByWidth<BinaryArgs>(t, a, b); };
+    return widthFamily(name, mathTypes(), doc, outDoc, false, ports,
+                       {&Binary<Op>::template K<1>::run, &Binary<Op>::template K<2>::run,
+                        &Binary<Op>::template K<3>::run});
 }
 
 }  // namespace specula::nodes
+
+namespace specula::nodes {
+inline void addNodes(NodeRegistry& r, NodeSpec s) { r.add(std::move(s)); }
+inline void addNodes(NodeRegistry& r, std::vector<NodeSpec> specs) {
+    for (NodeSpec& s : specs) r.add(std::move(s));
+}
+}  // namespace specula::nodes
+
+// A node file whose declaration is one expression, a NodeSpec or several: SPECULA_REGISTER_NODE(declareNode(...)).
+#define SPECULA_REGISTER_NODE(...)                                                                  \
+    namespace {                                                                                     \
+    void specula_register_node(::specula::graph::NodeRegistry& r) { ::specula::nodes::addNodes(r, __VA_ARGS__); } \
+    }                                                                                               \
+    SPECULA_REGISTER_NODES(specula_register_node)
+
+// The notes of a category (what its nodes share; docs/nodes.md shows them under the category's heading), declared
+// once, in nodes/<category>/category.cpp.
+#define SPECULA_DESCRIBE_CATEGORY(category, notes)                                                             \
+    namespace {                                                                                               \
+    void specula_describe_category(::specula::graph::NodeRegistry& r) { r.describeCategory(category, notes); } \
+    }                                                                                                         \
+    SPECULA_REGISTER_NODES(specula_describe_category)

@@ -102,6 +102,7 @@ ojson nodeSpecJson(const NodeSpec& s) {
                  {"prototype", s.glslPrototype()}};
     j["parity"] = {{"tolerance", jsonNum(s.parityTolerance)}, {"note", s.parityNote}};
     if (!s.gpuSubstitute.empty()) j["gpu_substitute"] = s.gpuSubstitute;
+    if (!s.notes.empty()) j["notes"] = s.notes;
     return j;
 }
 

@@ -212,6 +212,9 @@ struct NodeSpec {
     int version = 1;
     std::string category;  // family: constant, geometry, texture, math, convert, fresnel, bsdf, closure
     std::string doc;
+    // Implementation notes for the reference page (docs/nodes.md, `specula nodes`): the formula, the papers and the
+    // CPU and GLSL homes of the model, where the one-line doc has no room for them. Empty: none.
+    std::string notes;
     std::vector<PortSpec> inputs, outputs;
     std::vector<ResourceSpec> resources;  // GPU resources of the GLSL function, in parameter-name order
     uint32_t flags = 0;
@@ -290,9 +293,18 @@ public:
     const NodeSpec* find(const std::string& id) const;
     std::vector<std::string> ids() const;           // sorted
     std::vector<const NodeSpec*> all() const;       // sorted by id
+    // What the nodes of a category share (the notes under its heading in docs/nodes.md), declared once per category
+    // in the category's own folder (nodes/<category>/category.cpp). Empty for an undescribed category.
+    void describeCategory(const std::string& category, std::string notes) { categoryNotes_[category] = std::move(notes); }
+    const std::string& categoryNotes(const std::string& category) const {
+        static const std::string kNone;
+        auto it = categoryNotes_.find(category);
+        return it == categoryNotes_.end() ? kNone : it->second;
+    }
 
 private:
     std::map<std::string, std::unique_ptr<NodeSpec>> specs_;
+    std::map<std::string, std::string> categoryNotes_;
 };
 
 struct NodeRegistrar {

@@ -1,6 +1,6 @@
 // `specula nodes`: the node registry as text, JSON or the Markdown reference page (docs/nodes.md).
-// Everything per node comes from its NodeSpec; the only fixed text here is the page's prose (conventions, the
-// parity measurements, per-category notes and a few implementation notes that are not NodeSpec fields).
+// Everything per node comes from its NodeSpec (notes included) and every category's notes from its folder
+// (NodeRegistry::categoryNotes); the only fixed text here is the page's prose (conventions, parity measurements).
 // Output is deterministic (sorted ids, locale-independent number formatting), so the committed page can be
 // compared byte for byte with a fresh run (tests/unit/test_nodes_doc.cpp).
 #include "plugin/cli/nodes_command.h"
@@ -172,81 +172,6 @@ const std::vector<std::string>& categoryOrder() {
     static const std::vector<std::string> order = {"constant", "geometry", "texture", "math",
                                                    "convert",  "fresnel",  "bsdf",    "closure"};
     return order;
-}
-
-// Notes shown under a category heading: what the NodeSpecs of the family share.
-const std::map<std::string, std::string>& categoryNotes() {
-    static const std::map<std::string, std::string> notes = {
-        {"constant", "A typed literal as a node. Pure: always folded on the CPU; in GLSL the literal is a uniform-block "
-                     "member.\n"},
-        {"geometry",
-         "GLSL: read `SpeculaShadingInputs s`. CPU sources (`ShadingPoint sp`):\n\n"
-         "| id | CPU source |\n"
-         "|---|---|\n"
-         "| `geometry.uv` | `sp.uv`, `sp.duvdx`, `sp.duvdy` |\n"
-         "| `geometry.position` | `sp.p`, `sp.dpdx`, `sp.dpdy` |\n"
-         "| `geometry.normal` | `sp.n`, `sp.dndx`, `sp.dndy` |\n"
-         "| `geometry.tangent` | `sp.tangent.xyz`, `.w` |\n"
-         "| `geometry.geometric_normal` | `sp.ng` |\n\n"
-         "Derivatives: CPU from ray differentials (zero when `sp.hasDifferentials` is false); GLSL from the struct, "
-         "which `specula_shading_inputs()` fills with `dFdx/dFdy` (tested: exact for linear attributes).\n"},
-        {"texture", "Plain string inputs (`file`, `colorspace`) are literals resolved on the host (a `file` is relative "
-                    "to the scene file); enum choices reach GLSL as their index. For a node with a `sampler2D` in its "
-                    "prototype the emitter declares `layout(binding = i) uniform sampler2D spc_tex_<node>`.\n"},
-        {"math", "Component-wise; typed variants `math.<op>.<type>` with `<type>` in `float`, `vec2`, `color3`, "
-                 "`vector3` (`dot`, `normalize`, `length`: `vec2`, `vector3`). Writing `math.add` alone is an error "
-                 "suggesting a typed variant.\n"},
-        {"convert", "Connections never convert implicitly ([graph-format.md](graph-format.md#types-and-conversions)): "
-                    "these nodes are the explicit conversions. Input `in`, output `out`; broadcasts copy the float into "
-                    "every component, reinterpretations keep the values (no renormalisation).\n"},
-        {"fresnel", "Pattern nodes; `cos_theta` defaults to the binding `NdotV` = dot(N, wo). CPU code is "
-                    "`core/render/lobes/fresnel.h`; GLSL twins are in the prelude (same operation order).\n"},
-        {"bsdf", "Closure-producing nodes. The first BSDF node of a material fixes its shading frame (from its "
-                 "`normal`/`tangent` inputs); later BSDFs with another frame are rotated into it "
-                 "([graph-format.md](graph-format.md#compilation-cpu)). The material output is the graph's `\"output\"` "
-                 "reference (a closure).\n"},
-        {"closure", "Closure combinators; their closure inputs are required (a closure has no default).\n"},
-    };
-    return notes;
-}
-
-// Implementation notes for single nodes: references and formulas that are not NodeSpec fields.
-const std::map<std::string, std::string>& nodeNotes() {
-    static const std::map<std::string, std::string> notes = {
-        {"texture.image",
-         "`colorspace`: any OCIO name/alias or `raw`; `color` is converted to the working space. CPU: "
-         "`TextureStore::sample` (OIIO TextureSystem, bilinear + anisotropic MIP filtering with the footprint, v = 0 "
-         "bottom). GLSL: the host-built MIP chain (`GlMipChain`) read with `textureLod` at GL's LOD, in "
-         "EXT_texture_filter_anisotropic probes computed in the shader (up to 16; footprints within 0.1 % of "
-         "isotropic take one); the raster integrator runs the same filter on the CPU; the emitter declares the sampler."},
-        {"texture.normal_map",
-         "`normal` = normalize(x·T + y·sign·(N×T) + z·N) with (x, y, z) = 2·color − 1, x and y scaled by `strength`, "
-         "T Gram-Schmidt-orthogonalised to N."},
-        {"math.remap.float", "out_min + (x − in_min)/(in_max − in_min)·(out_max − out_min); out_min if in_max = in_min; "
-                             "no clamping."},
-        {"math.remap.vec2", "As `math.remap.float`, per component."},
-        {"math.remap.color3", "As `math.remap.float`, per component."},
-        {"math.remap.vector3", "As `math.remap.float`, per component."},
-        {"bsdf.diffuse", "CPU: `LambertLobe`."},
-        {"bsdf.ggx",
-         "α = roughness² (Burley 2012); aspect a = √(1 − 0.9·anisotropy), αx = α/a, αy = α·a (Burley 2012, addendum "
-         "B.2), αx and αy clamped at 1e-4 like `GgxLobe`; `fresnel` is evaluated per microfacet at wo·h. CPU: "
-         "`GgxLobe` (anisotropic GGX D, Walter et al. 2007 Eq. 33; height-correlated Smith G2, Heitz 2014 Eq. 99; VNDF "
-         "sampling, Heitz 2018), unfiltered. GLSL: the same eval, f·cos = weight·F·D·G2/(4 wo.z)."},
-        {"bsdf.dielectric",
-         "η = `ior` outside (`front_facing` ≥ 0.5), 1/`ior` inside; α as `bsdf.ggx`. CPU: `GgxLobe` with "
-         "`fresnelDielectric(wo·h, η)` for reflection plus `GgxTransmissionLobe` (core/render/lobes/dielectric.h) for "
-         "refraction: f·cos = (1 − F) D G2 |wi·h| |wo·h| / (|wo.z| (wi·h + wo·h/η')² η'²), η' = n_wi/n_wo, "
-         "h = normalize(wo + η' wi) (Walter et al. 2007, Eqs. 16 and 21, radiance form); refraction sampled through a "
-         "visible normal (Heitz 2018), pdf with the Jacobian of Eq. 17. The closure's lobes scatter only to their side "
-         "of the geometric surface (`BsdfQuery::ng`). GLSL: the same direction eval; polygon queries as `bsdf.ggx` "
-         "with `partial` set for a polygon below the surface; environment queries add (1 − F(wo.z)) times "
-         "`spc_host_environment` along the refracted view direction at α·|1 − 1/η|/2."},
-        {"bsdf.emission", "No lobes: emission only."},
-        {"closure.add", "Lobes are concatenated, at most `Closure::kMaxLobes` = 8."},
-        {"closure.mix", "Lobe weights and emission are scaled."},
-    };
-    return notes;
 }
 
 // ---- paste-able example materials -----------------------------------------------------------------
@@ -592,8 +517,7 @@ std::vector<std::string> orderedCategories(const std::vector<const NodeSpec*>& a
 std::string nodeMarkdown(const NodeSpec& s) {
     std::string m = "### `" + s.id + "`\n\n";
     m += s.doc + "\n\n";
-    auto note = nodeNotes().find(s.id);
-    if (note != nodeNotes().end()) m += "Notes: " + note->second + "\n\n";
+    if (!s.notes.empty()) m += "Notes: " + s.notes + "\n\n";
     m += "- version " + std::to_string(s.version) + ", category `" + s.category + "`\n";
     m += "- flags: " + flagsText(s) + "\n";
     m += "- GLSL: `" + s.glslPrototype() + "`";
@@ -658,8 +582,8 @@ std::string registryMarkdown(const std::vector<const NodeSpec*>& all) {
     m += "\n";
     for (auto& c : cats) {
         m += "## " + c + "\n\n";
-        auto note = categoryNotes().find(c);
-        if (note != categoryNotes().end()) m += note->second + "\n";
+        const std::string& notes = NodeRegistry::instance().categoryNotes(c);  // nodes/<category>/category.cpp
+        if (!notes.empty()) m += notes + "\n\n";
         for (auto* s : all)
             if (s->category == c) m += nodeMarkdown(*s);
     }
@@ -676,8 +600,7 @@ std::string listingText(const std::vector<const NodeSpec*>& all) {
 std::string nodeText(const NodeSpec& s) {
     std::string t = s.id + "  (version " + std::to_string(s.version) + ", category " + s.category + ")\n";
     t += "  " + s.doc + "\n";
-    auto note = nodeNotes().find(s.id);
-    if (note != nodeNotes().end()) t += "  Notes: " + note->second + "\n";
+    if (!s.notes.empty()) t += "  Notes: " + s.notes + "\n";
     t += "inputs:\n";
     std::vector<std::vector<std::string>> rows;
     for (auto& p : s.inputs) {

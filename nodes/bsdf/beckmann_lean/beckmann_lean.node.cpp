@@ -46,17 +46,12 @@ void cpu(EvalContext& c, const Instr& i) {
 }
 
 void reg(NodeRegistry& r) {
-    NodeSpec s;
-    s.id = "bsdf.beckmann_lean";
-    s.category = "bsdf";
-    s.doc = "Beckmann microfacet reflection with a LEAN slope Gaussian (Olano & Baker 2010): mean slope and covariance "
-            "(e.g. from texture.lean) plus the material roughness as (alpha^2/2) I; Smith G2 of the shifted Gaussian. "
-            "Quad lights in closed form (polygon queries): the LTC of an equivalent GGX (tilted frame, alpha^2 = 1.5 Sigma).";
-    kParams.describe(s);
-    s.outputs = kOutputs.ports();
-    s.cpu = &cpu;
-    s.glslFunction = "spc_bsdf_beckmann_lean";
-    s.glslFile = "bsdf/beckmann_lean/beckmann_lean.glsl";
+    NodeSpec s = declareNode("bsdf.beckmann_lean",
+                             "Beckmann microfacet reflection with a LEAN slope Gaussian (Olano & Baker 2010): mean "
+                             "slope and covariance (e.g. from texture.lean) plus the material roughness as "
+                             "(alpha^2/2) I; Smith G2 of the shifted Gaussian. Quad lights in closed form (polygon "
+                             "queries): the LTC of an equivalent GGX (tilted frame, alpha^2 = 1.5 Sigma).",
+                             kParams, kOutputs, &cpu);
     s.glslLibraries = {"shared/ltc.glsl", "shared/fresnel_f0.glsl"};
     // Polygon queries (LTC quad lights through the equivalent GGX): the GGX fits and the mag/fres/sphere table.
     s.resources = {ltc::matrixResource(), ltc::amplitudeResource(), ltc::anisotropicResource()};

@@ -50,20 +50,24 @@ void cpu(EvalContext& c, const Instr& i) {
 }
 
 void reg(NodeRegistry& r) {
-    NodeSpec s;
-    s.id = "bsdf.dielectric";
-    s.category = "bsdf";
-    s.doc = "Rough glass (Walter et al. 2007): GGX reflection with the exact dielectric Fresnel and GGX refraction, "
-            "height-correlated Smith masking-shadowing, one roughness for both. The path tracer follows refracted paths "
-            "through closed objects (the IOR inverts inside, by `front_facing`); light samples reach it from both sides. "
-            "Quad lights: the reflection in closed form (its LTC), the refraction sampled. Raster/GPU preview: the "
-            "environment seen along the refracted view direction (one refraction, no exit), lights behind the surface "
-            "unlit.";
-    kParams.describe(s);
-    s.outputs = kOutputs.ports();
-    s.cpu = &cpu;
-    s.glslFunction = "spc_bsdf_dielectric";
-    s.glslFile = "bsdf/dielectric/dielectric.glsl";
+    NodeSpec s = declareNode("bsdf.dielectric",
+                             "Rough glass (Walter et al. 2007): GGX reflection with the exact dielectric Fresnel and "
+                             "GGX refraction, height-correlated Smith masking-shadowing, one roughness for both. The "
+                             "path tracer follows refracted paths through closed objects (the IOR inverts inside, by "
+                             "`front_facing`); light samples reach it from both sides. Quad lights: the reflection in "
+                             "closed form (its LTC), the refraction sampled. Raster/GPU preview: the environment seen "
+                             "along the refracted view direction (one refraction, no exit), lights behind the surface "
+                             "unlit.",
+                             kParams, kOutputs, &cpu);
+    s.notes = "η = `ior` outside (`front_facing` ≥ 0.5), 1/`ior` inside; α as `bsdf.ggx`. CPU: `GgxLobe` with "
+              "`fresnelDielectric(wo·h, η)` for reflection plus `GgxTransmissionLobe` "
+              "(core/render/lobes/dielectric.h) for refraction: f·cos = (1 − F) D G2 |wi·h| |wo·h| / (|wo.z| (wi·h + "
+              "wo·h/η')² η'²), η' = n_wi/n_wo, h = normalize(wo + η' wi) (Walter et al. 2007, Eqs. 16 and 21, "
+              "radiance form); refraction sampled through a visible normal (Heitz 2018), pdf with the Jacobian of Eq. "
+              "17. The closure's lobes scatter only to their side of the geometric surface (`BsdfQuery::ng`). GLSL: "
+              "the same direction eval; polygon queries as `bsdf.ggx` with `partial` set for a polygon below the "
+              "surface; environment queries add (1 − F(wo.z)) times `spc_host_environment` along the refracted view "
+              "direction at α·|1 − 1/η|/2.";
     s.glslLibraries = {"shared/ltc.glsl", "shared/ggx_microfacet.glsl"};
     // Polygon and environment queries of the reflection: bsdf.ggx's LTC tables.
     s.resources = {ltc::matrixResource(), ltc::amplitudeResource(), ltc::anisotropicResource()};

@@ -25,16 +25,11 @@ void cpu(EvalContext& c, const Instr& i) {
 }
 
 void reg(NodeRegistry& r) {
-    NodeSpec s;
-    s.id = "bsdf.diffuse";
-    s.category = "bsdf";
-    s.doc = "Lambertian diffuse reflection, f = color/π. Quad lights in closed form (polygon queries): Lambert's form "
-            "factor (the LTC with M = I).";
-    kParams.describe(s);
-    s.outputs = kOutputs.ports();
-    s.cpu = &cpu;
-    s.glslFunction = "spc_bsdf_diffuse";
-    s.glslFile = "bsdf/diffuse/diffuse.glsl";
+    NodeSpec s = declareNode("bsdf.diffuse",
+                             "Lambertian diffuse reflection, f = color/π. Quad lights in closed form (polygon "
+                             "queries): Lambert's form factor (the LTC with M = I).",
+                             kParams, kOutputs, &cpu);
+    s.notes = "CPU: `LambertLobe`.";
     s.glslLibraries = {"shared/ltc.glsl"};
     // Polygon queries: the clip-free horizon reads the sphere channel of the shared LTC amplitude table.
     s.resources = {ltc::amplitudeResource()};

@@ -24,16 +24,10 @@ void cpu(EvalContext& c, const Instr& i) {
 }
 
 void reg(NodeRegistry& r) {
-    NodeSpec s;
-    s.id = "bsdf.emission";
-    s.category = "bsdf";
-    s.doc = "Emission closure: radiance color·strength (both sides), no scattering.";
-    kParams.describe(s);
-    s.outputs = kOutputs.ports();
-    s.flags = kEmissive;
-    s.cpu = &cpu;
-    s.glslFunction = "spc_bsdf_emission";
-    s.glslFile = "bsdf/emission/emission.glsl";
+    NodeSpec s = declareNode("bsdf.emission",
+                             "Emission closure: radiance color·strength (both sides), no scattering.",
+                             kParams, kOutputs, &cpu, kEmissive);
+    s.notes = "No lobes: emission only.";
     r.add(std::move(s));
 }
 

@@ -43,16 +43,16 @@ void cpu(EvalContext& c, const Instr& i) {
 }
 
 void reg(NodeRegistry& r) {
-    NodeSpec s;
-    s.id = "bsdf.ggx";
-    s.category = "bsdf";
-    s.doc = "Anisotropic GGX reflection, height-correlated Smith masking-shadowing (Heitz 2014, Eq. 99), unfiltered. "
-            "Quad lights in closed form (polygon queries): its fitted LTC (HDHN16), Fresnel as F0·mag + (1 − F0)·fres.";
-    kParams.describe(s);
-    s.outputs = kOutputs.ports();
-    s.cpu = &cpu;
-    s.glslFunction = "spc_bsdf_ggx";
-    s.glslFile = "bsdf/ggx/ggx.glsl";
+    NodeSpec s = declareNode("bsdf.ggx",
+                             "Anisotropic GGX reflection, height-correlated Smith masking-shadowing (Heitz 2014, Eq. "
+                             "99), unfiltered. Quad lights in closed form (polygon queries): its fitted LTC (HDHN16), "
+                             "Fresnel as F0·mag + (1 − F0)·fres.",
+                             kParams, kOutputs, &cpu);
+    s.notes = "α = roughness² (Burley 2012); aspect a = √(1 − 0.9·anisotropy), αx = α/a, αy = α·a (Burley 2012, "
+              "addendum B.2), αx and αy clamped at 1e-4 like `GgxLobe`; `fresnel` is evaluated per microfacet at "
+              "wo·h. CPU: `GgxLobe` (anisotropic GGX D, Walter et al. 2007 Eq. 33; height-correlated Smith G2, Heitz "
+              "2014 Eq. 99; VNDF sampling, Heitz 2018), unfiltered. GLSL: the same eval, f·cos = weight·F·D·G2/(4 "
+              "wo.z).";
     s.glslLibraries = {"shared/ltc.glsl", "shared/fresnel_f0.glsl", "shared/ggx_microfacet.glsl"};
     // Polygon queries (LTC quad lights): the isotropic and anisotropic GGX fits and the mag/fres/sphere table.
     s.resources = {ltc::matrixResource(), ltc::amplitudeResource(), ltc::anisotropicResource()};

@@ -118,18 +118,12 @@ void cpu(EvalContext& c, const Instr& i) {
 }
 
 void reg(NodeRegistry& r) {
-    NodeSpec s;
-    s.id = "bsdf.ggx_filtered";
-    s.category = "bsdf";
-    s.doc = "GGX reflection with NDF filtering for specular anti-aliasing (Tokuyoshi & Kaplanyan 2021): roughness matrix, "
-            "height-correlated Smith G2, slope-space (K16), projected-space exact/approximate and isotropic filters. "
-            "Quad lights in closed form (polygon queries): the LTC of its sampling matrix.";
-    kParams.describe(s);
-    s.outputs = kOutputs.ports();
-    s.flags = kNeedsDerivatives;
-    s.cpu = &cpu;
-    s.glslFunction = "spc_bsdf_ggx_filtered";
-    s.glslFile = "bsdf/ggx_filtered/ggx_filtered.glsl";
+    NodeSpec s = declareNode("bsdf.ggx_filtered",
+                             "GGX reflection with NDF filtering for specular anti-aliasing (Tokuyoshi & Kaplanyan "
+                             "2021): roughness matrix, height-correlated Smith G2, slope-space (K16), projected-space "
+                             "exact/approximate and isotropic filters. Quad lights in closed form (polygon queries): "
+                             "the LTC of its sampling matrix.",
+                             kParams, kOutputs, &cpu, kNeedsDerivatives);
     s.glslLibraries = {"shared/ltc.glsl"};
     // Polygon queries (LTC quad lights with the sampling matrix): the isotropic/anisotropic GGX fits, mag/fres/sphere.
     s.resources = {ltc::matrixResource(), ltc::amplitudeResource(), ltc::anisotropicResource()};

@@ -170,27 +170,21 @@ ResourceImage dictionaryTexels(const void*) {
 }
 
 void reg(NodeRegistry& r) {
-    NodeSpec s;
-    s.id = "bsdf.glint";
-    s.category = "bsdf";
-    s.doc = "Procedural glints (Chermain et al. 2020) with geometric glint anti-aliasing and slope correlation "
-            "(Chermain et al. 2021); converges to Cook-Torrance with a correlated Beckmann NDF as density grows. "
-            "The LOD footprint and the GGAA derivatives are one pixel step at any spp (C21's real-time setting): the "
-            "glints are a property of the image, so more samples average the same sparkles instead of revealing "
-            "finer ones. "
-            "Quad lights in closed form on the CPU (polygon queries, render.area_lights \"ltc\"): each EWA cell's "
-            "slope distribution integrated over the light's half-slope region, at the GGAA MIPs of the light's centre (glint_area.h). The GLSL "
-            "function does not answer polygon queries: it returns partial = true and the host samples the light.";
-    kParams.describe(s);
-    s.outputs = kOutputs.ports();
-    s.flags = kNeedsDerivatives;
+    NodeSpec s = declareNode("bsdf.glint",
+                             "Procedural glints (Chermain et al. 2020) with geometric glint anti-aliasing and slope "
+                             "correlation (Chermain et al. 2021); converges to Cook-Torrance with a correlated "
+                             "Beckmann NDF as density grows. The LOD footprint and the GGAA derivatives are one pixel "
+                             "step at any spp (C21's real-time setting): the glints are a property of the image, so "
+                             "more samples average the same sparkles instead of revealing finer ones. Quad lights in "
+                             "closed form on the CPU (polygon queries, render.area_lights \"ltc\"): each EWA cell's "
+                             "slope distribution integrated over the light's half-slope region, at the GGAA MIPs of "
+                             "the light's centre (glint_area.h). The GLSL function does not answer polygon queries: "
+                             "it returns partial = true and the host samples the light.",
+                             kParams, kOutputs, &cpu, kNeedsDerivatives);
     s.resources = {{"dictionary", "sampler1DArray", ResourceSpec::Kind::BuiltinTable,
                     "glint dictionary (Chermain et al. 2020): 64 x 1024 layers RGBA32F, box MIP chain 0..6",
                     &dictionaryTexels}};
-    s.cpu = &cpu;
     s.gpuSubstituteCpu = &cpuGpuTwin;  // no gpuSubstitute sentence: the GLSL is the model, less integrated quad lights
-    s.glslFunction = "spc_bsdf_glint";
-    s.glslFile = "bsdf/glint/glint.glsl";
     s.parityTolerance = 5e-4f;
     s.parityNote = "GGAA off and on: measured 5.3e-5 worst case over 1024 samples on llvmpipe (float vs float, both "
                    "MIP blends from the exact log2: the GLSL passes its own LOD to textureLod rather than leave it to "

@@ -224,27 +224,22 @@ ResourceImage momentTexels(const void* prepared) {
 }
 
 void reg(NodeRegistry& r) {
-    NodeSpec s;
-    s.id = "bsdf.glint_pndf";
-    s.category = "bsdf";
-    s.doc = "Position-normal manifold glints (Wu et al. 2024) of an explicit normal map of any size: the exact P-NDF of the "
-            "pixel footprint (the map triangulated into affine position-normal triangles with Jacobian clamping, summed "
-            "through a min-max quadtree and a least-squares cluster hierarchy) as the microfacet D of a conductor or "
-            "dielectric reflection, sampled exactly for MIS, with separable Smith masking. The footprint is one pixel "
-            "step at any spp (the glints are a property of the image, like bsdf.glint). The manifold is cached on disk "
-            "by content hash ($SPECULA_CACHE_DIR, else $XDG_CACHE_HOME/specula or ~/.cache/specula). Quad lights are "
-            "sampled (no polygon query).";
-    kParams.describe(s);
-    s.outputs = kOutputs.ports();
-    s.flags = kNeedsDerivatives;
-    s.cpu = &cpu;
+    NodeSpec s = declareNode("bsdf.glint_pndf",
+                             "Position-normal manifold glints (Wu et al. 2024) of an explicit normal map of any size: "
+                             "the exact P-NDF of the pixel footprint (the map triangulated into affine "
+                             "position-normal triangles with Jacobian clamping, summed through a min-max quadtree and "
+                             "a least-squares cluster hierarchy) as the microfacet D of a conductor or dielectric "
+                             "reflection, sampled exactly for MIS, with separable Smith masking. The footprint is one "
+                             "pixel step at any spp (the glints are a property of the image, like bsdf.glint). The "
+                             "manifold is cached on disk by content hash ($SPECULA_CACHE_DIR, else "
+                             "$XDG_CACHE_HOME/specula or ~/.cache/specula). Quad lights are sampled (no polygon "
+                             "query).",
+                             kParams, kOutputs, &cpu, kNeedsDerivatives);
     s.prepare = &prepare;
     s.gpuSubstitute = "LEAN-filtered GGX of the same normal map (texture.lean over a footprint of the P-NDF kernel's "
                       "variance, then bsdf.ggx_filtered with filter none, alpha floor 0.02, Schlick F0 = F(0 deg)): the "
                       "same mean and spread of normals, without the individual glints.";
     s.gpuSubstituteCpu = &cpuSubstitute;
-    s.glslFunction = "spc_bsdf_glint_pndf";
-    s.glslFile = "bsdf/glint_pndf/glint_pndf.glsl";
     s.glslLibraries = {"shared/ltc.glsl", "shared/fresnel_f0.glsl", "texture/lean/lean.glsl",
                        "bsdf/ggx_filtered/ggx_filtered.glsl"};
     s.resources = {{"moments", "sampler2D", ResourceSpec::Kind::DerivedImage,

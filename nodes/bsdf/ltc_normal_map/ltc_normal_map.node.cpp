@@ -261,25 +261,20 @@ void cpu(EvalContext& c, const Instr& i) {
 }
 
 void reg(NodeRegistry& r) {
-    NodeSpec s;
-    s.id = "bsdf.ltc_normal_map";
-    s.category = "bsdf";
-    s.doc = "Normal-mapped GGX (base roughness per texel) plus Lambert, filtered over the pixel footprint by prefiltered "
-            "LTCs (Nahmias 2022; Student-t EM fits per MIP texel and view, ltc-filtering.md §5.3): one specular and one "
-            "diffuse LTC lobe in the geometric tangent frame; analytic under quad lights. roughness and strength are "
-            "uniform (one value per material): the tables are fitted for them when the material is loaded (one fit per "
-            "MIP texel and view; 128^2: 743k fits, ~20 s on 2 cores) and cached on disk by content hash "
-            "($SPECULA_CACHE_DIR/ltc); the CPU and the GLSL read the same prepared tables (resources 'tables', "
-            "'normals', plus the base GGX tables), so a host must not change these two uniforms without re-exporting "
-            "the resources. GLSL: direction queries (f·cos = tint·magnitude·D_ltc per lobe) and polygon queries (the "
-            "LTC polygon integral, exact clip or clip-free, shared/ltc.glsl).";
-    kParams.describe(s);
-    s.outputs = kOutputs.ports();
-    s.flags = kNeedsDerivatives;
-    s.cpu = &cpu;
+    NodeSpec s = declareNode("bsdf.ltc_normal_map",
+                             "Normal-mapped GGX (base roughness per texel) plus Lambert, filtered over the pixel "
+                             "footprint by prefiltered LTCs (Nahmias 2022; Student-t EM fits per MIP texel and view, "
+                             "ltc-filtering.md §5.3): one specular and one diffuse LTC lobe in the geometric tangent "
+                             "frame; analytic under quad lights. roughness and strength are uniform (one value per "
+                             "material): the tables are fitted for them when the material is loaded (one fit per MIP "
+                             "texel and view; 128^2: 743k fits, ~20 s on 2 cores) and cached on disk by content hash "
+                             "($SPECULA_CACHE_DIR/ltc); the CPU and the GLSL read the same prepared tables (resources "
+                             "'tables', 'normals', plus the base GGX tables), so a host must not change these two "
+                             "uniforms without re-exporting the resources. GLSL: direction queries (f·cos = "
+                             "tint·magnitude·D_ltc per lobe) and polygon queries (the LTC polygon integral, exact "
+                             "clip or clip-free, shared/ltc.glsl).",
+                             kParams, kOutputs, &cpu, kNeedsDerivatives);
     s.prepare = &prepare;
-    s.glslFunction = "spc_bsdf_ltc_normal_map";
-    s.glslFile = "bsdf/ltc_normal_map/ltc_normal_map.glsl";
     s.glslLibraries = {"shared/ltc.glsl"};
     // The default tolerance holds: both sides read the same prepared tables and filter them alike (GL trilinear =
     // the CPU's texel-centre and MIP conventions), so only float rounding differs.

@@ -25,15 +25,8 @@ void cpu(EvalContext& c, const Instr& i) {
 }
 
 void reg(NodeRegistry& r) {
-    NodeSpec s;
-    s.id = "closure.add";
-    s.category = "closure";
-    s.doc = "Sum of two closures a + b.";
-    kParams.describe(s);
-    s.outputs = kOutputs.ports();
-    s.cpu = &cpu;
-    s.glslFunction = "spc_closure_add";
-    s.glslFile = "closure/add/add.glsl";
+    NodeSpec s = declareNode("closure.add", "Sum of two closures a + b.", kParams, kOutputs, &cpu);
+    s.notes = "Lobes are concatenated, at most `Closure::kMaxLobes` = 8.";
     r.add(std::move(s));
 }
 }  // namespace

@@ -27,15 +27,8 @@ void cpu(EvalContext& c, const Instr& i) {
 }
 
 void reg(NodeRegistry& r) {
-    NodeSpec s;
-    s.id = "closure.mix";
-    s.category = "closure";
-    s.doc = "Blend of two closures a·(1 − t) + b·t.";
-    kParams.describe(s);
-    s.outputs = kOutputs.ports();
-    s.cpu = &cpu;
-    s.glslFunction = "spc_closure_mix";
-    s.glslFile = "closure/mix/mix.glsl";
+    NodeSpec s = declareNode("closure.mix", "Blend of two closures a·(1 − t) + b·t.", kParams, kOutputs, &cpu);
+    s.notes = "Lobe weights and emission are scaled.";
     r.add(std::move(s));
 }
 }  // namespace

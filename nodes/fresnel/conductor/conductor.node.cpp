@@ -23,16 +23,11 @@ void cpu(EvalContext& c, const Instr& i) {
 }
 
 void reg(NodeRegistry& r) {
-    NodeSpec s;
-    s.id = "fresnel.conductor";
-    s.category = "fresnel";
-    s.doc = "Exact conductor Fresnel reflectance for a complex IOR eta + i k per RGB channel (unpolarised average of r_s and r_p).";
-    kParams.describe(s);
-    s.outputs = kOutputs.ports();
-    s.flags = kPure;
-    s.cpu = &cpu;
+    NodeSpec s = declareNode("fresnel.conductor",
+                             "Exact conductor Fresnel reflectance for a complex IOR eta + i k per RGB channel "
+                             "(unpolarised average of r_s and r_p).",
+                             kParams, kOutputs, &cpu, kPure);
     s.glslFunction = "spc_fresnel_conductor_node";
-    s.glslFile = "fresnel/conductor/conductor.glsl";
     r.add(std::move(s));
 }
 }  // namespace

@@ -20,16 +20,11 @@ void cpu(EvalContext& c, const Instr& i) {
 }
 
 void reg(NodeRegistry& r) {
-    NodeSpec s;
-    s.id = "fresnel.dielectric";
-    s.category = "fresnel";
-    s.doc = "Exact unpolarised dielectric Fresnel reflectance for relative IOR (Walter et al. 2007, Eq. 22); 1 under total internal reflection.";
-    kParams.describe(s);
-    s.outputs = kOutputs.ports();
-    s.flags = kPure;
-    s.cpu = &cpu;
+    NodeSpec s = declareNode("fresnel.dielectric",
+                             "Exact unpolarised dielectric Fresnel reflectance for relative IOR (Walter et al. 2007, "
+                             "Eq. 22); 1 under total internal reflection.",
+                             kParams, kOutputs, &cpu, kPure);
     s.glslFunction = "spc_fresnel_dielectric_node";
-    s.glslFile = "fresnel/dielectric/dielectric.glsl";
     r.add(std::move(s));
 }
 }  // namespace

@@ -21,16 +21,10 @@ void cpu(EvalContext& c, const Instr& i) {
 }
 
 void reg(NodeRegistry& r) {
-    NodeSpec s;
-    s.id = "fresnel.schlick";
-    s.category = "fresnel";
-    s.doc = "Schlick's approximation F0 + (1 - F0)(1 - cos)^5 (Schlick 1994, Eq. 24).";
-    kParams.describe(s);
-    s.outputs = kOutputs.ports();
-    s.flags = kPure;
-    s.cpu = &cpu;
+    NodeSpec s = declareNode("fresnel.schlick",
+                             "Schlick's approximation F0 + (1 - F0)(1 - cos)^5 (Schlick 1994, Eq. 24).",
+                             kParams, kOutputs, &cpu, kPure);
     s.glslFunction = "spc_fresnel_schlick_node";
-    s.glslFile = "fresnel/schlick/schlick.glsl";
     r.add(std::move(s));
 }
 }  // namespace

@@ -5,25 +5,8 @@
 
 namespace specula::nodes {
 namespace {
-OutputList kOutputs;
-const OutPort<Vec3> kOutNg = kOutputs.add<Vec3>("Ng", TypeDesc::Normal3, "geometric normal");
-
-void cpu(EvalContext& c, const Instr& i) {
-    const ShadingPoint& sp = *c.sp;
-    set(c, i, kOutNg, sp.ng);
-}
-
-void reg(NodeRegistry& r) {
-    NodeSpec s;
-    s.id = "geometry.geometric_normal";
-    s.category = "geometry";
-    s.doc = "Geometric normal Ng (world).";
-    s.outputs = kOutputs.ports();
-    s.cpu = &cpu;
-    s.glslFunction = "spc_geometry_geometric_normal";
-    s.glslFile = "geometry/geometric_normal/geometric_normal.glsl";
-    r.add(std::move(s));
-}
+void cpu(EvalContext& c, const Instr& i) { setOutputs(c, i, c.sp->ng); }
 }  // namespace
-SPECULA_REGISTER_NODES(reg);
+SPECULA_REGISTER_NODE(declareNode("geometry.geometric_normal", "Geometric normal Ng (world).",
+                                  {PortSpec::out("Ng", TypeDesc::Normal3, "geometric normal")}, &cpu));
 }  // namespace specula::nodes

@@ -5,28 +5,11 @@
 
 namespace specula::nodes {
 namespace {
-OutputList kOutputs;
-const OutPort<Vec3> kOutT = kOutputs.add<Vec3>("T", TypeDesc::Vector3, "tangent");
-const OutPort<float> kOutSign = kOutputs.add<float>("sign", TypeDesc::Float, "bitangent sign (B = sign * cross(N, T))");
-
-void cpu(EvalContext& c, const Instr& i) {
-    const ShadingPoint& sp = *c.sp;
-    set(c, i, kOutT, Vec3(sp.tangent));
-    set(c, i, kOutSign, sp.tangent.w);
-}
-
-void reg(NodeRegistry& r) {
-    NodeSpec s;
-    s.id = "geometry.tangent";
-    s.category = "geometry";
-    s.doc = "Mesh tangent T (world) and the bitangent sign.";
-    s.outputs = kOutputs.ports();
-    s.flags = kReadsUv;  // the tangent of a mesh is made from its uvs
-    s.cpu = &cpu;
-    s.glslFunction = "spc_geometry_tangent";
-    s.glslFile = "geometry/tangent/tangent.glsl";
-    r.add(std::move(s));
-}
+void cpu(EvalContext& c, const Instr& i) { setOutputs(c, i, Vec3(c.sp->tangent), c.sp->tangent.w); }
 }  // namespace
-SPECULA_REGISTER_NODES(reg);
+// kReadsUv: the tangent of a mesh is made from its uvs.
+SPECULA_REGISTER_NODE(declareNode("geometry.tangent", "Mesh tangent T (world) and the bitangent sign.",
+                                  {PortSpec::out("T", TypeDesc::Vector3, "tangent"),
+                                   PortSpec::out("sign", TypeDesc::Float, "bitangent sign (B = sign * cross(N, T))")},
+                                  &cpu, kReadsUv));
 }  // namespace specula::nodes

@@ -4,13 +4,7 @@
 namespace specula::nodes {
 namespace {
 float op(float a, float b) { return b == 0.f ? 0.f : a / b; }
-void reg(NodeRegistry& r) {
-    registerTyped(r, "math", "div", mathTypes(), "Component-wise quotient a / b; 0 where b == 0.", [](NodeSpec& s, TypeDesc t) {
-        s.inputs = portsByWidth<BinaryArgs>(t, OperandDoc{0.f, "numerator"}, OperandDoc{1.f, "denominator (0 gives 0)"});
-        s.outputs = {PortSpec::out("out", t, "a / b")};
-        s.cpu = byWidth<Binary<op>::K>(t);
-    });
-}
 }  // namespace
-SPECULA_REGISTER_NODES(reg);
+SPECULA_REGISTER_NODE(binaryMath<op>("div", "Component-wise quotient a / b; 0 where b == 0.", "a / b",
+                                     {0.f, "numerator"}, {1.f, "denominator (0 gives 0)"}));
 }  // namespace specula::nodes

@@ -6,13 +6,7 @@
 namespace specula::nodes {
 namespace {
 float op(float a, float b) { return a <= 0.f ? 0.f : std::pow(a, b); }
-void reg(NodeRegistry& r) {
-    registerTyped(r, "math", "pow", mathTypes(), "Component-wise power a^b; 0 where a ≤ 0.", [](NodeSpec& s, TypeDesc t) {
-        s.inputs = portsByWidth<BinaryArgs>(t, OperandDoc{1.f, "base (≤ 0 gives 0)", 0.f, 4.f}, OperandDoc{1.f, "exponent", -2.f, 4.f});
-        s.outputs = {PortSpec::out("out", t, "a^b")};
-        s.cpu = byWidth<Binary<op>::K>(t);
-    });
-}
 }  // namespace
-SPECULA_REGISTER_NODES(reg);
+SPECULA_REGISTER_NODE(binaryMath<op>("pow", "Component-wise power a^b; 0 where a ≤ 0.", "a^b",
+                                     {1.f, "base (≤ 0 gives 0)", 0.f, 4.f}, {1.f, "exponent", -2.f, 4.f}));
 }  // namespace specula::nodes

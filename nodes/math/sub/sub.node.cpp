@@ -4,13 +4,7 @@
 namespace specula::nodes {
 namespace {
 float op(float a, float b) { return a - b; }
-void reg(NodeRegistry& r) {
-    registerTyped(r, "math", "sub", mathTypes(), "Component-wise difference a - b.", [](NodeSpec& s, TypeDesc t) {
-        s.inputs = portsByWidth<BinaryArgs>(t, OperandDoc{0.f, "first operand"}, OperandDoc{0.f, "second operand"});
-        s.outputs = {PortSpec::out("out", t, "a - b")};
-        s.cpu = byWidth<Binary<op>::K>(t);
-    });
-}
 }  // namespace
-SPECULA_REGISTER_NODES(reg);
+SPECULA_REGISTER_NODE(binaryMath<op>("sub", "Component-wise difference a - b.", "a - b",
+                                     {0.f, "first operand"}, {0.f, "second operand"}));
 }  // namespace specula::nodes

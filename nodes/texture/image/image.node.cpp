@@ -138,21 +138,20 @@ void cpuGpuTwin(EvalContext& c, const Instr& i) {
 }
 
 void reg(NodeRegistry& r) {
-    NodeSpec s;
-    s.id = "texture.image";
-    s.category = "texture";
-    s.doc = "Filtered image lookup. v = 0 is the bottom row (OpenGL convention).";
-    kParams.describe(s);
-    s.outputs = kOutputs.ports();
-    s.flags = kNeedsDerivatives;
+    NodeSpec s = declareNode("texture.image",
+                             "Filtered image lookup. v = 0 is the bottom row (OpenGL convention).",
+                             kParams, kOutputs, &cpu, kNeedsDerivatives);
+    s.notes = "`colorspace`: any OCIO name/alias or `raw`; `color` is converted to the working space. CPU: "
+              "`TextureStore::sample` (OIIO TextureSystem, bilinear + anisotropic MIP filtering with the footprint, v "
+              "= 0 bottom). GLSL: the host-built MIP chain (`GlMipChain`) read with `textureLod` at GL's LOD, in "
+              "EXT_texture_filter_anisotropic probes computed in the shader (up to 16; footprints within 0.1 % of "
+              "isotropic take one); the raster integrator runs the same filter on the CPU; the emitter declares the "
+              "sampler.";
     s.resources = {{"image", "sampler2D", ResourceSpec::Kind::ImageFile,
                     "the image in the working space, RGBA, rows bottom-up, MIP-mapped, trilinear, wrap as the input",
                     &imageTexels, "file", "colorspace"}};
-    s.cpu = &cpu;
     s.gpuSubstituteCpu = &cpuGpuTwin;  // the GLSL filters by GL's rules, OpenImageIO's filter is the CPU model
     s.prepare = &prepare;
-    s.glslFunction = "spc_texture_image";
-    s.glslFile = "texture/image/image.glsl";
     s.parityTolerance = 5e-3f;
     s.parityNote = "against the GPU twin (GL rules on the same MIP chain, footprints included): colour and alpha within "
                    "llvmpipe's bilinear-weight rounding (8.4e-5 at zero footprint); the texture gradients divide a "

@@ -116,22 +116,16 @@ void cpu(EvalContext& c, const Instr& i) {
 }
 
 void reg(NodeRegistry& r) {
-    NodeSpec s;
-    s.id = "texture.lean";
-    s.category = "texture";
-    s.doc = "LEAN mapping (Olano & Baker 2010): footprint-filtered first and second slope moments of a tangent-space "
-            "normal map -> mean normal, mean slope, (sigma_x, sigma_y, rho) and the slope covariance, in the frame "
-            "(T, N x T, N) of the normal/tangent inputs. Slopes: x = -nx/nz, y = -ny/nz.";
-    kParams.describe(s);
-    s.outputs = kOutputs.ports();
-    s.flags = kNeedsDerivatives;
+    NodeSpec s = declareNode("texture.lean",
+                             "LEAN mapping (Olano & Baker 2010): footprint-filtered first and second slope moments of "
+                             "a tangent-space normal map -> mean normal, mean slope, (sigma_x, sigma_y, rho) and the "
+                             "slope covariance, in the frame (T, N x T, N) of the normal/tangent inputs. Slopes: x = "
+                             "-nx/nz, y = -ny/nz.",
+                             kParams, kOutputs, &cpu, kNeedsDerivatives);
     s.resources = {{"moments", "sampler2D", ResourceSpec::Kind::DerivedImage,
                     "LEAN slope-moment pyramid built from the file on load (LeanPyramid::glslPackedLevel per level)",
                     &momentTexels, "file", ""}};
-    s.cpu = &cpu;
     s.prepare = &prepare;
-    s.glslFunction = "spc_texture_lean";
-    s.glslFile = "texture/lean/lean.glsl";
     s.parityTolerance = 3e-4f;
     s.parityNote = "the parity image has texels below the horizon (slopes clamped to 16, moments up to 256); the mean "
                    "and covariance of mixed footprints are small differences of such sums (FMA contraction on llvmpipe), "

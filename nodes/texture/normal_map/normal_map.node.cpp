@@ -68,18 +68,13 @@ void cpu(EvalContext& c, const Instr& i) {
 }
 
 void reg(NodeRegistry& r) {
-    NodeSpec s;
-    s.id = "texture.normal_map";
-    s.category = "texture";
-    s.doc = "Tangent-space normal map to a world-space shading normal (feed it to a BSDF's normal).";
-    kParams.describe(s);
-    s.outputs = kOutputs.ports();
-    s.flags = kPure;
-    s.cpu = &cpu;
+    NodeSpec s = declareNode("texture.normal_map",
+                             "Tangent-space normal map to a world-space shading normal (feed it to a BSDF's normal).",
+                             kParams, kOutputs, &cpu, kPure);
+    s.notes = "`normal` = normalize(x·T + y·sign·(N×T) + z·N) with (x, y, z) = 2·color − 1, x and y scaled by "
+              "`strength`, T Gram-Schmidt-orthogonalised to N.";
     s.parityTolerance = 2e-4f;
     s.parityNote = "frame construction + renormalisation (sqrt/divide, FMA contraction on llvmpipe), measured 9.0e-5";
-    s.glslFunction = "spc_texture_normal_map";
-    s.glslFile = "texture/normal_map/normal_map.glsl";
     r.add(std::move(s));
 }
 

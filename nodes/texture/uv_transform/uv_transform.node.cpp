@@ -32,21 +32,9 @@ void cpu(EvalContext& c, const Instr& i) {
     set(c, i, kDuvdx, rot(p.duvdx * p.scale));
     set(c, i, kDuvdy, rot(p.duvdy * p.scale));
 }
-
-void reg(NodeRegistry& r) {
-    NodeSpec s;
-    s.id = "texture.uv_transform";
-    s.category = "texture";
-    s.doc = "Scale, rotate and offset texture coordinates, carrying the uv footprint (duvdx, duvdy) along.";
-    kParams.describe(s);
-    s.outputs = kOutputs.ports();
-    s.flags = kPure | kNeedsDerivatives;
-    s.cpu = &cpu;
-    s.glslFunction = "spc_texture_uv_transform";
-    s.glslFile = "texture/uv_transform/uv_transform.glsl";
-    r.add(std::move(s));
-}
-
 }  // namespace
-SPECULA_REGISTER_NODES(reg);
+SPECULA_REGISTER_NODE(declareNode("texture.uv_transform",
+                                  "Scale, rotate and offset texture coordinates, carrying the uv footprint (duvdx, "
+                                  "duvdy) along.",
+                                  kParams, kOutputs, &cpu, kPure | kNeedsDerivatives));
 }  // namespace specula::nodes
