@@ -1,0 +1,26 @@
+# Guard of the per-test labels of tests/CMakeLists.txt (run by the ctest test `test_labels`): every unit test named
+# there for a label is a test ctest lists with that label, so a renamed or removed test fails here instead of silently
+# losing its label (and running, for example, in the sanitizer job). Arguments: -DCTEST=<ctest> -DBUILD=<build dir>
+# -DLISTS=<file that sets SPECULA_<LABEL>_UNIT_TESTS for LABELS> -DLABELS=<label,label,...>.
+include(${LISTS})
+string(REPLACE "," ";" labels "${LABELS}")
+set(missing "")
+foreach(label ${labels})
+  execute_process(COMMAND ${CTEST} --test-dir ${BUILD} -N -L "^${label}$" OUTPUT_VARIABLE listed RESULT_VARIABLE rc)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "ctest -N -L ${label} failed (${rc})")
+  endif()
+  string(TOUPPER ${label} upper)
+  foreach(name ${SPECULA_${upper}_UNIT_TESTS})
+    string(FIND "${listed}" ": ${name}\n" at)
+    if(at EQUAL -1)
+      list(APPEND missing "${label}: ${name}")
+    endif()
+  endforeach()
+endforeach()
+if(missing)
+  list(JOIN missing "\n  " text)
+  message(FATAL_ERROR "tests named in tests/CMakeLists.txt that ctest does not list with that label:\n  ${text}")
+endif()
+list(LENGTH SPECULA_HEAVY_UNIT_TESTS n)
+message(STATUS "labels: all ${n} heavy unit tests and the soak test carry their labels")
