@@ -469,15 +469,16 @@ const Integrator::RasterShadows& Integrator::rasterShadows() const {
     return st.maps;
 }
 
-// The GPU preview's light transport on the CPU (docs/preview.md): what plugin/preview's fragment shader computes, so
-// that the two agree image for image. Delta lights by one direction query times the visibility of the preview's shadow
-// maps (core/render/shadow_maps.h: the same maps, built here by one ray per texel centre, and the same lookup at the
-// tessellated point and its geometric normal); quad lights, unshadowed, by the closure's polygon integral (LTC), or,
-// when a lobe has no closed form, by a direction query towards the light's centre times its solid angle; an
-// environment, unshadowed, by the split sum (core/render/environment_prefilter.h): each LTC lobe's polygon integral over
-// the hemisphere of the shading normal (its directional albedo) times the prefiltered environment where the lobe's LTC
-// points, at the roughness of its peak (the irradiance map for diffuse lobes); when a lobe has no closed form, the
-// closure's f(wi = N)·π times the irradiance at N.
+// The GPU preview's light transport on the CPU (docs/preview.md): what plugin/preview/preview_lights.glsl computes,
+// so that the two agree image for image. Delta lights by one direction query times the visibility of the preview's
+// shadow maps (core/render/shadow_maps.h: the same maps, built here by one ray per texel centre, and the same lookup at
+// the tessellated point and its geometric normal); quad lights by the closure's polygon integral (LTC), or, when a lobe
+// has no closed form, by a direction query towards the light's centre times its solid angle, both times the visibility
+// of the light's centre (a cube map there); an environment by the split sum (core/render/environment_prefilter.h): each
+// LTC lobe's polygon integral over the hemisphere of the shading normal (its directional albedo) times the prefiltered
+// environment where the lobe's LTC points, at the roughness of its peak (the irradiance map for diffuse lobes); when a
+// lobe has no closed form, the closure's f(wi = N)·π times the irradiance at N; both times environmentShadowVisibility
+// (the irradiance-weighted visibility of kShadowDirections orthographic maps).
 void Integrator::rasterLighting(const ShadingPoint& sp, const Closure& closure, SampleValue& out) const {
     const Vec3 wo = sp.wo;
     const RasterShadows& shadows = rasterShadows();
@@ -531,8 +532,9 @@ void Integrator::rasterLighting(const ShadingPoint& sp, const Closure& closure, 
                 q.polygonHorizon = scene_.render.ltcHorizon;
                 BsdfEval fa;
                 LobeMask analytic = closure.integratePolygon(q, poly, n, fa);
+                const float vis = visibility(li);  // from the light's centre (core/render/shadow_maps.h)
                 if ((closure.allLobes() & ~analytic) == 0) {
-                    add(fa, Lp);
+                    add(fa, Lp * vis);
                     break;
                 }
                 Vec3 c = (poly[0] + poly[1] + poly[2] + poly[3]) * 0.25f;
@@ -541,7 +543,8 @@ void Integrator::rasterLighting(const ShadingPoint& sp, const Closure& closure, 
                 Vec3 nl = glm::cross(r.direction, r.edgeV);
                 float area = glm::length(nl);
                 float solidAngle = area * std::abs(glm::dot(wi, nl / area)) / (dist * dist);
-                if (glm::dot(wi, sp.ng) > 0.f) add(direction(wi, std::numeric_limits<float>::infinity()), Lp * solidAngle);
+                if (glm::dot(wi, sp.ng) > 0.f)
+                    add(direction(wi, std::numeric_limits<float>::infinity()), Lp * solidAngle * vis);
                 break;
             }
             case RasterLight::Kind::Mesh: break;  // the rasteriser does not light with emissive meshes
@@ -558,10 +561,19 @@ void Integrator::rasterLighting(const ShadingPoint& sp, const Closure& closure, 
                 BsdfEval fa;
                 LobeMask analytic = closure.integrateEnvironment(
                     q, poly, 4, [&env](const Vec3& d, float alpha) { return env.lookup(d, alpha); }, fa);
+                // The share of the environment that reaches the point (environmentShadowVisibility): each shadow
+                // direction weighted by the irradiance from it.
+                float irradiance[kShadowDirections];
+                for (int k = 0; k < kShadowDirections; ++k) {
+                    const Color3 e = env.lookup(-shadowDirection(k).axis, -1.f);
+                    irradiance[k] = e.x + e.y + e.z;
+                }
+                const float vis = environmentShadowVisibility(shadows.layout, shadows.texels.data(), int(li), sp.p, sp.ng,
+                                                              irradiance);
                 if ((closure.allLobes() & ~analytic) == 0)
-                    add(fa, Color3(1.f));
+                    add(fa, Color3(vis));
                 else
-                    add(direction(nn, std::numeric_limits<float>::infinity()), env.lookup(nn, -1.f) * kPi);
+                    add(direction(nn, std::numeric_limits<float>::infinity()), env.lookup(nn, -1.f) * kPi * vis);
                 break;
             }
         }

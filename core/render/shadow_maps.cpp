@@ -45,6 +45,24 @@ void axisFrame(const Vec3& axis, Vec3& right, Vec3& up) {
 
 }  // namespace
 
+const ShadowFrame& shadowDirection(int k) {
+    static const std::vector<ShadowFrame> frames = [] {
+        std::vector<ShadowFrame> r;
+        const float a = 1.f / std::sqrt(3.f);
+        const Vec3 sky[kShadowDirections] = {{1, 0, 0},  {-1, 0, 0}, {0, 1, 0},   {0, -1, 0},  {0, 0, 1},
+                                             {0, 0, -1}, {a, a, a},  {-a, a, a},  {a, -a, a},  {-a, -a, a},
+                                             {a, a, -a}, {-a, a, -a}, {a, -a, -a}, {-a, -a, -a}};
+        for (const Vec3& d : sky) {
+            ShadowFrame f;
+            f.axis = -d;
+            axisFrame(f.axis, f.right, f.up);
+            r.push_back(f);
+        }
+        return r;
+    }();
+    return frames[size_t(k)];
+}
+
 ShadowLayout planShadowMaps(const Scene& scene, const std::vector<RasterLight>& lights) {
     ShadowLayout layout;
     layout.lights.resize(lights.size());
@@ -68,6 +86,9 @@ ShadowLayout planShadowMaps(const Scene& scene, const std::vector<RasterLight>& 
         else if (r.kind == RasterLight::Kind::Spot)
             wanted[i] = r.cosOuter > std::cos(glm::radians(kShadowMaxSpotFov * 0.5f)) ? 1 : 6;
         else if (r.kind == RasterLight::Kind::Directional) wanted[i] = 1;
+        else if (r.kind == RasterLight::Kind::Quad) wanted[i] = 6;
+        else if (r.kind == RasterLight::Kind::Environment && (r.hasMap || maxComponent(r.value) > 0.f))
+            wanted[i] = kShadowDirections;
         layers += wanted[i];
     }
     if (layers == 0) return layout;
@@ -97,8 +118,27 @@ ShadowLayout planShadowMaps(const Scene& scene, const std::vector<RasterLight>& 
             layout.views.push_back(v);
             continue;
         }
-        s.origin = r.position;
-        const float zFar = (glm::length(r.position - centre) + radius) * 1.01f;
+        if (r.kind == RasterLight::Kind::Environment) {
+            s.mode = ShadowMode::Directions;
+            s.origin = centre;
+            s.reach = radius * 1.01f;
+            s.scale = 1.f / radius;
+            s.texelFactor = 2.f / (s.scale * float(size));
+            for (int k = 0; k < kShadowDirections; ++k) {
+                const ShadowFrame& d = shadowDirection(k);
+                ShadowView v;
+                v.origin = s.origin - d.axis * s.reach, v.axis = d.axis, v.right = d.right, v.up = d.up;
+                v.scale = s.scale;
+                v.zNear = 0.f;
+                v.zFar = radius * 2.02f;
+                v.ortho = true;
+                layout.views.push_back(v);
+            }
+            continue;
+        }
+        // A quad light's cube sits at its centre (the corner plus half of each edge).
+        s.origin = r.kind == RasterLight::Kind::Quad ? r.position + (r.direction + r.edgeV) * 0.5f : r.position;
+        const float zFar = (glm::length(s.origin - centre) + radius) * 1.01f;
         const float zNear = zFar * 1e-4f;
         if (wanted[i] == 1) {
             s.mode = ShadowMode::Perspective;
@@ -129,31 +169,25 @@ ShadowLayout planShadowMaps(const Scene& scene, const std::vector<RasterLight>& 
     return layout;
 }
 
-float shadowVisibility(const ShadowLayout& layout, const float* texels, int light, const Vec3& p, const Vec3& ng) {
-    const ShadowLight& s = layout.lights[size_t(light)];
-    if (s.mode == ShadowMode::None) return 1.f;
+namespace {
+
+// One map's visibility: v = p minus the view's origin, the 2x2 PCF of shadowVisibility. clipToMap: points outside the
+// map are lit (every map but a cube's face, which covers its directions).
+float viewVisibility(const ShadowLayout& layout, const float* texels, bool ortho, bool clipToMap, int layer, const Vec3& v,
+                     const Vec3& axis, const Vec3& right, const Vec3& up, float scale, float texelFactor, const Vec3& ng) {
     const int N = layout.size;
-    const bool ortho = s.mode == ShadowMode::Ortho;
-    Vec3 axis = s.axis, right = s.right, up = s.up;
-    int layer = s.firstLayer;
-    const Vec3 v = p - s.origin;
-    if (s.mode == ShadowMode::Cube) {
-        const int f = cubeFace(v);
-        axis = faceVec(f, 0), right = faceVec(f, 1), up = faceVec(f, 2);
-        layer += f;
-    }
     const float z0 = glm::dot(v, axis);
     if (!ortho && !(z0 > 0.f)) return 1.f;  // behind a spot
-    const float w = ortho ? s.texelFactor : z0 * s.texelFactor;
+    const float w = ortho ? texelFactor : z0 * texelFactor;
     const Vec3 q = v + ng * (kShadowNormalBias * w);
     const float z = glm::dot(q, axis);
-    float sx = glm::dot(q, right) * s.scale, sy = glm::dot(q, up) * s.scale;
+    float sx = glm::dot(q, right) * scale, sy = glm::dot(q, up) * scale;
     if (!ortho) {
         if (!(z > 0.f)) return 1.f;
         sx = sx / z;
         sy = sy / z;
     }
-    if (s.mode != ShadowMode::Cube && !(std::abs(sx) <= 1.f && std::abs(sy) <= 1.f)) return 1.f;
+    if (clipToMap && !(std::abs(sx) <= 1.f && std::abs(sy) <= 1.f)) return 1.f;
     const float u = (sx * 0.5f + 0.5f) * float(N) - 0.5f, t = (sy * 0.5f + 0.5f) * float(N) - 0.5f;
     const float fu = std::floor(u), ft = std::floor(t);
     const float ax = u - fu, ay = t - ft;
@@ -168,6 +202,41 @@ float shadowVisibility(const ShadowLayout& layout, const float* texels, int ligh
     return (1.f - ay) * ((1.f - ax) * l00 + ax * l10) + ay * ((1.f - ax) * l01 + ax * l11);
 }
 
+}  // namespace
+
+float shadowVisibility(const ShadowLayout& layout, const float* texels, int light, const Vec3& p, const Vec3& ng) {
+    const ShadowLight& s = layout.lights[size_t(light)];
+    if (s.mode == ShadowMode::None || s.mode == ShadowMode::Directions) return 1.f;
+    Vec3 axis = s.axis, right = s.right, up = s.up;
+    int layer = s.firstLayer;
+    const Vec3 v = p - s.origin;
+    if (s.mode == ShadowMode::Cube) {
+        const int f = cubeFace(v);
+        axis = faceVec(f, 0), right = faceVec(f, 1), up = faceVec(f, 2);
+        layer += f;
+    }
+    return viewVisibility(layout, texels, s.mode == ShadowMode::Ortho, s.mode != ShadowMode::Cube, layer, v, axis, right,
+                          up, s.scale, s.texelFactor, ng);
+}
+
+float environmentShadowVisibility(const ShadowLayout& layout, const float* texels, int light, const Vec3& p,
+                                  const Vec3& ng, const float* irradiance) {
+    const ShadowLight& s = layout.lights[size_t(light)];
+    if (s.mode != ShadowMode::Directions) return 1.f;
+    float lit = 0.f, total = 0.f;
+    for (int k = 0; k < kShadowDirections; ++k) {
+        const ShadowFrame& d = shadowDirection(k);
+        const float w = std::max(0.f, -glm::dot(d.axis, ng)) * irradiance[k];
+        if (!(w > 0.f)) continue;
+        const Vec3 origin = s.origin - d.axis * s.reach;
+        const Vec3 v = p - origin;
+        lit += w * viewVisibility(layout, texels, true, true, s.firstLayer + k, v, d.axis, d.right, d.up, s.scale,
+                                  s.texelFactor, ng);
+        total += w;
+    }
+    return total > 0.f ? lit / total : 1.f;
+}
+
 std::string shadowLookupGlsl() {
     std::string faces;
     char buf[256];
@@ -177,9 +246,19 @@ std::string shadowLookupGlsl() {
                           double(kShadowCubeFace[f][k][1]), double(kShadowCubeFace[f][k][2]));
             faces += buf;
         }
+    std::string dirs;
+    for (int k = 0; k < kShadowDirections; ++k) {
+        const ShadowFrame& d = shadowDirection(k);
+        for (const Vec3& e : {d.axis, d.right, d.up}) {
+            std::snprintf(buf, sizeof buf, "%svec3(%.9g, %.9g, %.9g)", dirs.empty() ? "" : ", ", double(e.x), double(e.y),
+                          double(e.z));
+            dirs += buf;
+        }
+    }
     std::snprintf(buf, sizeof buf, "const float spc_shadow_normal_bias = %.9g;\nconst float spc_shadow_depth_bias = %.9g;\n",
                   double(kShadowNormalBias), double(kShadowDepthBias));
-    return std::string(buf) + "const vec3 spc_shadow_cube[18] = vec3[18](" + faces + ");\n" + R"(
+    return std::string(buf) + "const vec3 spc_shadow_cube[18] = vec3[18](" + faces + ");\n" +
+           "const vec3 spc_shadow_dirs[42] = vec3[42](" + dirs + ");\n" + R"(
 layout(binding = SPC_PREVIEW_SHADOW_BINDING) uniform sampler2DArray spc_shadow_maps;
 int spc_shadow_face(vec3 v) {
     float ax = abs(v.x), ay = abs(v.y), az = abs(v.z);
@@ -187,33 +266,22 @@ int spc_shadow_face(vec3 v) {
     if (ay >= az) return v.y >= 0.0 ? 2 : 3;
     return v.z >= 0.0 ? 4 : 5;
 }
-// h = (mode: 0 none, 1 cube, 2 perspective, 3 ortho; first layer; scale; texel factor). As shadowVisibility.
-float spc_shadow(vec4 h, vec3 origin, vec3 axis, vec3 right, vec3 up, vec3 P, vec3 Ng) {
-    int mode = int(h.x);
-    if (mode == 0) return 1.0;
+// One map, as viewVisibility.
+float spc_shadow_view(bool ortho, bool clip_to_map, int layer, vec3 v, vec3 axis, vec3 right, vec3 up,
+                      float scale, float texel_factor, vec3 Ng) {
     int N = textureSize(spc_shadow_maps, 0).x;
-    bool ortho = mode == 3;
-    int layer = int(h.y);
-    precise vec3 v = P - origin;
-    if (mode == 1) {
-        int f = spc_shadow_face(v);
-        axis = spc_shadow_cube[3 * f];
-        right = spc_shadow_cube[3 * f + 1];
-        up = spc_shadow_cube[3 * f + 2];
-        layer += f;
-    }
     precise float z0 = dot(v, axis);
     if (!ortho && !(z0 > 0.0)) return 1.0;
-    precise float w = ortho ? h.w : z0 * h.w;
+    precise float w = ortho ? texel_factor : z0 * texel_factor;
     precise vec3 q = v + Ng * (spc_shadow_normal_bias * w);
     precise float z = dot(q, axis);
-    precise float sx = dot(q, right) * h.z, sy = dot(q, up) * h.z;
+    precise float sx = dot(q, right) * scale, sy = dot(q, up) * scale;
     if (!ortho) {
         if (!(z > 0.0)) return 1.0;
         sx = sx / z;
         sy = sy / z;
     }
-    if (mode != 1 && !(abs(sx) <= 1.0 && abs(sy) <= 1.0)) return 1.0;
+    if (clip_to_map && !(abs(sx) <= 1.0 && abs(sy) <= 1.0)) return 1.0;
     precise float u = (sx * 0.5 + 0.5) * float(N) - 0.5, t = (sy * 0.5 + 0.5) * float(N) - 0.5;
     precise float fu = floor(u), ft = floor(t);
     precise float ax = u - fu, ay = t - ft;
@@ -227,6 +295,39 @@ float spc_shadow(vec4 h, vec3 origin, vec3 axis, vec3 right, vec3 up, vec3 P, ve
     }
     precise float vis = (1.0 - ay) * ((1.0 - ax) * l[0] + ax * l[1]) + ay * ((1.0 - ax) * l[2] + ax * l[3]);
     return vis;
+}
+// h = (mode: 0 none, 1 cube, 2 perspective, 3 ortho, 4 directions; first layer; scale; texel factor). As
+// shadowVisibility.
+float spc_shadow(vec4 h, vec3 origin, vec3 axis, vec3 right, vec3 up, vec3 P, vec3 Ng) {
+    int mode = int(h.x);
+    if (mode == 0 || mode == 4) return 1.0;
+    int layer = int(h.y);
+    precise vec3 v = P - origin;
+    if (mode == 1) {
+        int f = spc_shadow_face(v);
+        axis = spc_shadow_cube[3 * f];
+        right = spc_shadow_cube[3 * f + 1];
+        up = spc_shadow_cube[3 * f + 2];
+        layer += f;
+    }
+    return spc_shadow_view(mode == 3, mode != 1, layer, v, axis, right, up, h.z, h.w, Ng);
+}
+vec3 spc_shadow_direction(int k) { return -spc_shadow_dirs[3 * k]; }
+// As environmentShadowVisibility: E[k] the environment's irradiance (channel sum) towards spc_shadow_direction(k).
+float spc_shadow_environment(vec4 h, vec3 centre, float reach, float E[14], vec3 P, vec3 Ng) {
+    if (int(h.x) != 4) return 1.0;
+    precise float lit = 0.0, total = 0.0;
+    for (int k = 0; k < 14; ++k) {
+        vec3 axis = spc_shadow_dirs[3 * k];
+        precise float w = max(0.0, -dot(axis, Ng)) * E[k];
+        if (!(w > 0.0)) continue;
+        precise vec3 origin = centre - axis * reach;
+        precise vec3 v = P - origin;
+        lit += w * spc_shadow_view(true, true, int(h.y) + k, v, axis, spc_shadow_dirs[3 * k + 1],
+                                   spc_shadow_dirs[3 * k + 2], h.z, h.w, Ng);
+        total += w;
+    }
+    return total > 0.0 ? lit / total : 1.0;
 }
 )";
 }

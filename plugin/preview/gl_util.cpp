@@ -17,21 +17,25 @@ bool gOk = false, gTried = false;
 std::string gWhy;
 unsigned gVao = 0;
 
+// Whether a shader or program reached 'status'; if not, its info log into *log and the object deleted.
+bool succeeded(GLuint obj, GLenum status, void (*getiv)(GLuint, GLenum, GLint*),
+               void (*infoLog)(GLuint, GLsizei, GLsizei*, GLchar*), void (*remove)(GLuint), std::string* log) {
+    GLint ok = 0;
+    getiv(obj, status, &ok);
+    if (ok) return true;
+    char buf[8192];
+    infoLog(obj, sizeof buf, nullptr, buf);
+    if (log) *log = buf;
+    remove(obj);
+    return false;
+}
+
 GLuint compileShader(GLenum type, const std::string& src, std::string* log) {
     GLuint s = glCreateShader(type);
     const char* c = src.c_str();
     glShaderSource(s, 1, &c, nullptr);
     glCompileShader(s);
-    GLint ok = 0;
-    glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
-    if (!ok) {
-        char buf[8192];
-        glGetShaderInfoLog(s, sizeof buf, nullptr, buf);
-        if (log) *log = buf;
-        glDeleteShader(s);
-        return 0;
-    }
-    return s;
+    return succeeded(s, GL_COMPILE_STATUS, glGetShaderiv, glGetShaderInfoLog, glDeleteShader, log) ? s : 0;
 }
 }  // namespace
 
@@ -97,16 +101,7 @@ unsigned program(const std::string& vertex, const std::string& fragment, std::st
     glLinkProgram(p);
     glDeleteShader(v);
     glDeleteShader(f);
-    GLint ok = 0;
-    glGetProgramiv(p, GL_LINK_STATUS, &ok);
-    if (!ok) {
-        char buf[8192];
-        glGetProgramInfoLog(p, sizeof buf, nullptr, buf);
-        if (log) *log = buf;
-        glDeleteProgram(p);
-        return 0;
-    }
-    return p;
+    return succeeded(p, GL_LINK_STATUS, glGetProgramiv, glGetProgramInfoLog, glDeleteProgram, log) ? p : 0;
 }
 
 namespace {

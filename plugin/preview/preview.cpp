@@ -1,5 +1,5 @@
-// The GPU preview: shapes as triangle meshes, one program per material (its GLSL module plus the light loop below),
-// resources bound from the module's manifest, six AOVs in one pass, read back into the renderer's ImageSet.
+// The GPU preview: shapes as triangle meshes, one program per material (its GLSL module plus the light loop of
+// preview_lights.glsl), resources bound from the module's manifest, six AOVs in one pass, read back into an ImageSet.
 // The light transport is render.integrator "raster" of the CPU (Integrator::rasterLighting): keep the two alike.
 #define GL_GLEXT_PROTOTYPES 1
 #include "plugin/preview/preview.h"
@@ -15,6 +15,7 @@
 #include "core/scene/scene.h"
 #include "core/util/error.h"
 #include "plugin/preview/gl_util.h"
+#include "plugin/preview/preview_frame.h"
 
 #include <GL/gl.h>
 #include <GL/glext.h>
@@ -29,44 +30,36 @@
 #include <limits>
 #include <memory>
 
+namespace specula::embedded {
+extern const char* const kPreviewLightsGlsl;  // plugin/preview/preview_lights.glsl
+}
+
 namespace specula::preview {
 
 namespace {
 
-constexpr int kMaxLights = 64;
-// Per light: (kind, cos outer, cos inner, two-sided), position, direction, edge v, value, then its shadow map
-// (ShadowLight): (mode, first layer, scale, texel factor), origin, axis, right, up.
-constexpr int kLightVec4s = 10;
 constexpr int kAovCount = 5;    // beauty, diffuse, specular, normal, (depth, u, v)
 
-// The per-frame block shared by the vertex and fragment stages (std140: mat4, vec4s, ivec4, vec4 array).
-struct FrameBlock {
-    float viewProj[16];
-    float eye[4], forward[4];
-    int counts[4];  // light count, LTC horizon, 0, 0
-    float lights[kMaxLights * kLightVec4s][4];
-};
-
-const char* kFrameBlockGlsl = R"(
-layout(std140, binding = SPC_PREVIEW_FRAME_BINDING) uniform SpeculaPreviewFrame {
-    mat4 spc_view_proj;
-    vec4 spc_eye;
-    vec4 spc_forward;
-    ivec4 spc_counts;
-    vec4 spc_lights[64 * 10];
-};
+// Without the #version line: versionHeader() puts it and the frame block's binding first.
+// The mesh attributes (uploadMesh's order) as a stage's inputs or outputs: <prefix>_position, _normal, _tangent, _uv.
+std::string attributes(const char* qualifier, const char* prefix) {
+    const char* decl[4][2] = {{"vec3", "position"}, {"vec3", "normal"}, {"vec4", "tangent"}, {"vec2", "uv"}};
+    std::string s;
+    for (int k = 0; k < 4; ++k)
+        s += "layout(location = " + std::to_string(k) + ") " + qualifier + " " + decl[k][0] + " " + prefix + "_" + decl[k][1] +
+             ";\n";
+    return s;
+}
+// The AOV attachments every fragment stage writes (readBack's order).
+const char* const kAovOutputs = R"(
+layout(location = 0) out vec4 o_beauty;
+layout(location = 1) out vec4 o_diffuse;
+layout(location = 2) out vec4 o_specular;
+layout(location = 3) out vec4 o_normal;
+layout(location = 4) out vec4 o_aux;
 )";
 
-// Without the #version line: versionHeader() puts it and the frame block's binding first.
-const std::string kVertex = std::string(kFrameBlockGlsl) + R"(
-layout(location = 0) in vec3 a_position;
-layout(location = 1) in vec3 a_normal;
-layout(location = 2) in vec4 a_tangent;
-layout(location = 3) in vec2 a_uv;
-layout(location = 0) out vec3 v_position;
-layout(location = 1) out vec3 v_normal;
-layout(location = 2) out vec4 v_tangent;
-layout(location = 3) out vec2 v_uv;
+const std::string kVertex = frameBlockGlsl() + attributes("in", "a") + attributes("out", "v") + R"(
 void main() {
     v_position = a_position;
     v_normal = a_normal;
@@ -76,155 +69,13 @@ void main() {
 }
 )";
 
-// Appended to a material's module: the shading point from the interpolated attributes (two-sided as on the CPU: the
-// frame faces the viewer), then every light by its closed form, as Integrator::rasterLighting.
-const std::string kSurfaceMain = std::string(kFrameBlockGlsl) + shadowLookupGlsl() + R"(
-layout(location = 0) in vec3 v_position;
-layout(location = 1) in vec3 v_normal;
-layout(location = 2) in vec4 v_tangent;
-layout(location = 3) in vec2 v_uv;
-layout(location = 0) out vec4 o_beauty;
-layout(location = 1) out vec4 o_diffuse;
-layout(location = 2) out vec4 o_specular;
-layout(location = 3) out vec4 o_normal;
-layout(location = 4) out vec4 o_aux;
-
-vec3 spc_preview_diffuse, spc_preview_specular;
-void spc_preview_add(SpeculaClosure c, vec3 L) {
-    spc_preview_diffuse += c.f_diffuse * L;
-    spc_preview_specular += (c.f - c.f_diffuse) * L;
+// Appended to a material's module: plugin/preview/preview_lights.glsl (embedded by core/codegen/embed_glsl.cmake), the
+// shading point from the interpolated attributes, then every light by its closed form, as Integrator::rasterLighting.
+std::string surfaceMain() {
+    return frameBlockGlsl() + shadowLookupGlsl() + attributes("in", "v") + kAovOutputs + embedded::kPreviewLightsGlsl;
 }
-// The split sum's environment (core/render/environment_prefilter.h): the light being lit, then its prefiltered chain
-// (mip level α·(levels−1)) or irradiance map, row 0 = +z, read as PrefilteredEnvironment::lookup reads them.
-layout(binding = SPC_PREVIEW_ENV_BINDING) uniform sampler2D spc_env_specular;
-layout(binding = SPC_PREVIEW_ENV_BINDING + 1) uniform sampler2D spc_env_irradiance;
-vec3 spc_preview_env_value;
-bool spc_preview_env_map;
-float spc_preview_env_rotation;
-vec3 spc_host_environment(vec3 dir, float alpha) {
-    if (!spc_preview_env_map) return spc_preview_env_value;
-    float c = cos(spc_preview_env_rotation), s = sin(spc_preview_env_rotation);
-    vec3 r = vec3(c * dir.x + s * dir.y, -s * dir.x + c * dir.y, dir.z);  // environmentUv
-    // GLSL leaves atan(0, 0) undefined; C++'s atan2(±0, −0) = ±π puts the exact poles at u = 0 (a plane facing +z reads
-    // there, and row 0 varies with u)
-    float u = (r.x == 0.0 && r.y == 0.0) ? 0.0 : 0.5 - atan(r.y, -r.x) * 0.15915494309189535;
-    u -= floor(u);
-    vec2 uv = vec2(u, acos(clamp(r.z, -1.0, 1.0)) * 0.31830988618379067);
-    if (alpha < 0.0) return textureLod(spc_env_irradiance, uv, 0.0).rgb;
-    return textureLod(spc_env_specular, uv, clamp(alpha, 0.0, 1.0) * float(SPC_PREVIEW_ENV_LEVELS - 1)).rgb;
-}
-float spc_preview_spot(float c, float cos_outer, float cos_inner) {
-    if (c >= cos_inner) return 1.0;
-    if (c <= cos_outer) return 0.0;
-    float t = (c - cos_outer) / max(cos_inner - cos_outer, 1e-6);
-    return t * t * (3.0 - 2.0 * t);
-}
-
-void main() {
-    vec3 P = v_position;
-    vec3 wo = normalize(spc_eye.xyz - P);
-    vec3 Ng = normalize(cross(dFdx(P), dFdy(P)));  // faces the viewer (screen x cross screen y)
-    if (dot(Ng, wo) < 0.0) Ng = -Ng;
-    vec3 N = dot(v_normal, v_normal) > 0.0 ? normalize(gl_FrontFacing ? v_normal : -v_normal) : Ng;
-    vec4 T = v_tangent;
-    if (dot(T.xyz, T.xyz) <= 0.0) {
-        vec3 t0, b0, n0;
-        spc_frame(N, vec3(0.0), t0, b0, n0);
-        T = vec4(t0, 1.0);
-    }
-    SpeculaShadingInputs s = specula_shading_inputs(P, N, Ng, T, v_uv, wo);
-    SpeculaClosure c;
-    specula_material(specula_direction_query(wo, wo, 1.0 / 0.0), s, c);
-    vec3 emission = c.emission;
-    spc_preview_diffuse = vec3(0.0);
-    spc_preview_specular = vec3(0.0);
-    const float inf = 1.0 / 0.0;
-    // Every specula_material call is made in uniform control flow (the light count and kind and a material's
-    // partial answers are uniform): nodes take dFdxFine/dFdyFine of their own values (glint footprints, filtered
-    // lobes), which needs the whole 2x2 quad. A light that does not reach the point is dropped after the call.
-    // Shadows (delta lights) are looked up after the call, where the light reaches the point, and multiply its light.
-    for (int i = 0; i < spc_counts.x; ++i) {
-        vec4 h = spc_lights[10 * i];
-        vec3 a = spc_lights[10 * i + 1].xyz, b = spc_lights[10 * i + 2].xyz, e = spc_lights[10 * i + 3].xyz;
-        vec3 value = spc_lights[10 * i + 4].xyz;
-        int kind = int(h.x);
-        if (kind <= 1) {  // point, spot
-            vec3 d = a - P;
-            float d2 = dot(d, d);
-            float dist = sqrt(d2);
-            vec3 wi = d2 > 0.0 ? d / dist : s.geometric_normal;
-            float falloff = kind == 1 ? spc_preview_spot(dot(-wi, b), h.y, h.z) : 1.0;
-            specula_material(specula_direction_query(wo, wi, dist), s, c);
-            if (d2 > 0.0 && dot(wi, s.geometric_normal) > 0.0 && falloff > 0.0) {
-                float vis = spc_shadow(spc_lights[10 * i + 5], spc_lights[10 * i + 6].xyz, spc_lights[10 * i + 9].xyz,
-                                       spc_lights[10 * i + 7].xyz, spc_lights[10 * i + 8].xyz, P, s.geometric_normal);
-                if (vis > 0.0) spc_preview_add(c, value * (falloff / d2) * vis);
-            }
-        } else if (kind == 2) {  // directional: b = towards the light
-            specula_material(specula_direction_query(wo, b, inf), s, c);
-            if (dot(b, s.geometric_normal) > 0.0) {
-                float vis = spc_shadow(spc_lights[10 * i + 5], spc_lights[10 * i + 6].xyz, spc_lights[10 * i + 9].xyz,
-                                       spc_lights[10 * i + 7].xyz, spc_lights[10 * i + 8].xyz, P, s.geometric_normal);
-                if (vis > 0.0) spc_preview_add(c, value * vis);
-            }
-        } else if (kind == 3) {  // quad: corner a, edges b and e (QuadLight::polygon's winding)
-            vec3 n = normalize(cross(b, e));
-            float side = dot(P - a, n);
-            bool lit = !(side == 0.0 || (h.w == 0.0 && side < 0.0));
-            vec3 p[4];
-            if (side > 0.0) p = vec3[4](a, a + e, a + b + e, a + b);
-            else p = vec3[4](a, a + b, a + b + e, a + e);
-            for (int k = 0; k < 4; ++k) p[k] -= P;
-            specula_material(specula_polygon_query(wo, p, 4, spc_counts.y), s, c);
-            if (!c.partial) {
-                if (lit) spc_preview_add(c, value);
-                continue;
-            }
-            vec3 ctr = (p[0] + p[1] + p[2] + p[3]) * 0.25;
-            float dist = length(ctr);
-            vec3 wi = ctr / dist;
-            vec3 nl = cross(b, e);
-            float area = length(nl);
-            float solid_angle = area * abs(dot(wi, nl / area)) / (dist * dist);
-            specula_material(specula_direction_query(wo, wi, inf), s, c);
-            if (lit && dot(wi, s.geometric_normal) > 0.0) spc_preview_add(c, value * solid_angle);
-        } else {  // environment: the split sum over the hemisphere of the shading normal (h.y: has a map, h.z: its turn)
-            spc_preview_env_value = value;
-            spc_preview_env_map = h.y != 0.0;
-            spc_preview_env_rotation = h.z;
-            vec3 tt, bb, nn;
-            spc_frame(s.normal, s.tangent.xyz, tt, bb, nn);
-            const float lift = SPC_PREVIEW_HEMISPHERE_LIFT;
-            vec3 p[4] = vec3[4](normalize(tt + lift * nn), normalize(bb + lift * nn), normalize(-tt + lift * nn),
-                                normalize(-bb + lift * nn));
-            specula_material(specula_environment_query(wo, p, spc_counts.y), s, c);
-            if (!c.partial) {
-                spc_preview_add(c, vec3(1.0));
-            } else {
-                specula_material(specula_direction_query(wo, nn, inf), s, c);
-                spc_preview_add(c, spc_host_environment(nn, -1.0) * 3.14159265358979);
-            }
-        }
-    }
-    o_beauty = vec4(emission + spc_preview_diffuse + spc_preview_specular, 1.0);
-    o_diffuse = vec4(spc_preview_diffuse, 1.0);
-    o_specular = vec4(spc_preview_specular, 1.0);
-    o_normal = vec4(s.normal, 1.0);
-    o_aux = vec4(dot(P - spc_eye.xyz, spc_forward.xyz), v_uv, 1.0);
-}
-)";
-
 // Quad-light geometry: its radiance towards the viewer on the emitting side (QuadLight::radiance), no scattering.
-const std::string kEmitterFragment = std::string(kFrameBlockGlsl) + R"(
-layout(location = 0) in vec3 v_position;
-layout(location = 1) in vec3 v_normal;
-layout(location = 2) in vec4 v_tangent;
-layout(location = 3) in vec2 v_uv;
-layout(location = 0) out vec4 o_beauty;
-layout(location = 1) out vec4 o_diffuse;
-layout(location = 2) out vec4 o_specular;
-layout(location = 3) out vec4 o_normal;
-layout(location = 4) out vec4 o_aux;
+const std::string kEmitterFragment = frameBlockGlsl() + attributes("in", "v") + kAovOutputs + R"(
 layout(location = 0) uniform vec4 u_radiance;   // rgb, two-sided
 layout(location = 1) uniform vec3 u_light_normal;
 void main() {
@@ -250,13 +101,8 @@ void main() {
     gl_Position = vec4(p, 0.0, 1.0);  // depth 0: infinitely far under the reversed-Z pass
 }
 )";
-const std::string kBackgroundFragment = std::string("#version 450 core\n") + R"(
+const std::string kBackgroundFragment = std::string("#version 450 core\n") + kAovOutputs + R"(
 layout(location = 0) in vec2 v_ndc;
-layout(location = 0) out vec4 o_beauty;
-layout(location = 1) out vec4 o_diffuse;
-layout(location = 2) out vec4 o_specular;
-layout(location = 3) out vec4 o_normal;
-layout(location = 4) out vec4 o_aux;
 layout(binding = 0) uniform sampler2D u_map;
 layout(location = 0) uniform vec3 u_forward;
 layout(location = 1) uniform vec3 u_right;  // times the half width
@@ -386,21 +232,6 @@ void viewProjection(const PerspectiveCamera& cam, float zNear, float* out) {
     }
 }
 
-void packLight(const RasterLight& r, const ShadowLight& sh, float (*dst)[4]) {
-    dst[0][0] = float(int(r.kind));
-    const bool env = r.kind == RasterLight::Kind::Environment;
-    dst[0][1] = env ? (r.hasMap ? 1.f : 0.f) : r.cosOuter;
-    dst[0][2] = env ? r.mapRotation : r.cosInner;
-    dst[0][3] = r.twoSided ? 1.f : 0.f;
-    const Vec3 vs[3] = {r.position, r.direction, r.edgeV};
-    for (int k = 0; k < 3; ++k) dst[1 + k][0] = vs[k].x, dst[1 + k][1] = vs[k].y, dst[1 + k][2] = vs[k].z, dst[1 + k][3] = 0.f;
-    dst[4][0] = r.value.x, dst[4][1] = r.value.y, dst[4][2] = r.value.z, dst[4][3] = 0.f;
-    dst[5][0] = float(int(sh.mode)), dst[5][1] = float(sh.firstLayer), dst[5][2] = sh.scale, dst[5][3] = sh.texelFactor;
-    const Vec3 frame[4] = {sh.origin, sh.right, sh.up, sh.axis};
-    for (int k = 0; k < 4; ++k)
-        dst[6 + k][0] = frame[k].x, dst[6 + k][1] = frame[k].y, dst[6 + k][2] = frame[k].z, dst[6 + k][3] = 0.f;
-}
-
 // The preview's own defines, after a module (or after versionHeader): the frame block's uniform-buffer binding, the
 // shadow maps' texture unit (the prefiltered environment's two follow it), the chain's levels and the CPU's hemisphere
 // lift (integrator.h).
@@ -414,7 +245,7 @@ std::string glslDefines(int frameBinding, int shadowBinding) {
     return buf;
 }
 // A module with the preview's prefiltered environment: SPECULA_HOST_ENVIRONMENT defined right after its #version line,
-// before the prelude (which then declares spc_host_environment; kSurfaceMain defines it).
+// before the prelude (which then declares spc_host_environment; surfaceMain defines it).
 std::string withHostEnvironment(const std::string& module) {
     const size_t eol = module.find('\n');
     if (eol == std::string::npos || module.compare(0, 8, "#version") != 0)
@@ -605,7 +436,7 @@ PreviewRenderer::PreviewRenderer(const Scene& scene, const nlohmann::json& mater
         ++count;
     }
     st.shadows = planShadowMaps(scene, st.rasterLights);
-    for (int i = 0; i < count; ++i) packLight(st.rasterLights[size_t(i)], st.shadows.lights[size_t(i)], &st.frame.lights[i * kLightVec4s]);
+    for (int i = 0; i < count; ++i) st.frame.lights[i] = packLight(st.rasterLights[size_t(i)], st.shadows.lights[size_t(i)]);
     st.frame.counts[0] = count;
     st.frame.counts[1] = scene.render.ltcHorizon;
     glGenBuffers(1, &st.frameBuffer);
@@ -640,7 +471,7 @@ PreviewRenderer::PreviewRenderer(const Scene& scene, const nlohmann::json& mater
         // The module starts with its #version line; the defines and the main go after the whole module.
         std::string log;
         st.mats[m].program = gl::program(
-            vertex, withHostEnvironment(sources[m]) + glslDefines(st.frameBinding, st.shadowBinding) + kSurfaceMain, &log);
+            vertex, withHostEnvironment(sources[m]) + glslDefines(st.frameBinding, st.shadowBinding) + surfaceMain(), &log);
         if (!st.mats[m].program) {
             const std::string& name = scene.materials[m]->name();
             throw InputError("/materials/" + pointerEscape(name),
@@ -705,7 +536,7 @@ double PreviewRenderer::draw(const CameraDesc& cameraDesc, int W, int H) {
     const float zFar = (st.sceneFar + glm::length(camera.position() - PerspectiveCamera(scene.camera, W, H).position())) * 1.01f;
     const float zNear = std::max(zFar * 1e-5f, 1e-5f);
     FrameBlock& frame = st.frame;
-    viewProjection(camera, zNear, frame.viewProj);
+    viewProjection(camera, zNear, frame.view_proj);
     frame.eye[0] = camera.position().x, frame.eye[1] = camera.position().y, frame.eye[2] = camera.position().z;
     frame.forward[0] = camera.forward().x, frame.forward[1] = camera.forward().y, frame.forward[2] = camera.forward().z;
     glBindBuffer(GL_UNIFORM_BUFFER, st.frameBuffer);

@@ -1,13 +1,19 @@
 // Shadow maps of render.integrator "raster" and the GPU preview (docs/preview.md): a floor under a square occluder, lit
-// by a point, a spot and a directional light; the pixels known to be in the occluder's shadow are black on both sides,
-// lit pixels keep the unshadowed value, and the layout keeps its texel budget.
+// by a point, a spot and a directional light, and beside a wall, lit by a quad light and a sky; the shadowed pixels are
+// as dark as known on both sides, lit pixels keep the unshadowed value, the layout keeps its texel budget, and the
+// frame block's GLSL layout is what the C++ packer writes.
 #include "core/render/accel.h"
 #include "core/render/renderer.h"
 #include "core/render/shadow_maps.h"
 #include "core/scene/scene.h"
 #include "core/scene/scene_loader.h"
+#include "plugin/preview/gl_util.h"
 #include "plugin/preview/preview.h"
+#include "plugin/preview/preview_frame.h"
 
+#define GL_GLEXT_PROTOTYPES 1
+#include <GL/gl.h>
+#include <GL/glext.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -140,16 +146,29 @@ TEST(PreviewShadows, LayoutKeepsTheTexelBudget) {
     ShadowLayout one = planShadowMaps(s, lights);
     EXPECT_EQ(one.size, 300);
     EXPECT_EQ(one.layers(), 6);
-    // A directional light's map covers the bounding sphere of the scene; quad lights and environments have none.
+    // A directional light's map covers the bounding sphere of the scene; a quad light gets a cube from its centre, an
+    // environment kShadowDirections maps, an emissive mesh none.
     RasterLight quad;
     quad.kind = RasterLight::Kind::Quad;
     RasterLight sun;
     sun.kind = RasterLight::Kind::Directional;
     sun.direction = Vec3(0.f, 0.f, 1.f);
-    ShadowLayout mixed = planShadowMaps(s, {quad, sun});
-    EXPECT_EQ(mixed.layers(), 1);
-    EXPECT_EQ(mixed.lights[0].mode, ShadowMode::None);
+    quad.position = Vec3(1.f, 2.f, 3.f);
+    quad.direction = Vec3(2.f, 0.f, 0.f);
+    quad.edgeV = Vec3(0.f, 4.f, 0.f);
+    RasterLight sky;
+    sky.kind = RasterLight::Kind::Environment;
+    sky.value = Color3(1.f);
+    RasterLight mesh;
+    mesh.kind = RasterLight::Kind::Mesh;
+    ShadowLayout mixed = planShadowMaps(s, {quad, sun, sky, mesh});
+    EXPECT_EQ(mixed.layers(), 6 + 1 + kShadowDirections);
+    EXPECT_EQ(mixed.lights[0].mode, ShadowMode::Cube);
+    EXPECT_EQ(mixed.lights[0].origin, Vec3(2.f, 4.f, 3.f));
     EXPECT_EQ(mixed.lights[1].mode, ShadowMode::Ortho);
+    EXPECT_EQ(mixed.lights[2].mode, ShadowMode::Directions);
+    EXPECT_EQ(mixed.lights[2].firstLayer, 7);
+    EXPECT_EQ(mixed.lights[3].mode, ShadowMode::None);
 }
 
 namespace {
@@ -254,4 +273,115 @@ TEST(PreviewShadows, EnclosureImagesAgreeOnBothSidesInEveryDirection) {
         EXPECT_GT(dark, total / 200);  // shadows are in view
         EXPECT_LT(differ, total / 1000) << differ << " of " << total << " pixels differ, " << dark << " dark";
     }
+}
+
+namespace {
+
+// The floor of scene() with a wall standing on it along the y axis (x = 0, 2 m high, 4 m long); one light.
+std::string wallScene(const std::string& light, bool wall) {
+    std::string s = scene(light, false);
+    if (wall) {
+        const std::string floor = R"("material": "grey"})";
+        s.replace(s.find(floor), floor.size(),
+                  floor + R"(, {"type": "quad", "size": [2, 4], "transform": {"translate": [0, 0, 1], "rotate": [0, 90, 0]},
+                  "material": "grey"})");
+    }
+    return s;
+}
+
+}  // namespace
+
+TEST(PreviewShadows, QuadAndEnvironmentLightsAreShadowedOnBothSides) {
+    // A quad light at (2, 0, 3) facing down and a sky: the wall at x = 0 hides the quad's centre from the floor at
+    // x < 0 up to x = -3 (the line from (2, 0, 3) over the wall's top at (0, 0, 2) meets the floor there), and hides the
+    // sky's +x diagonals from floor points near it.
+    struct EnvCase {
+        const char* name;
+        std::string light;
+        float maxRatio;  // at x = -1: the shadowed beauty over the open one, at most
+        float minRatio;  // ... at least
+    };
+    const EnvCase cases[] = {
+        // The quad, seen from its centre: a hard shadow.
+        {"quad", R"({"type": "quad", "position": [2, 0, 3], "look_at": [2, 0, 0], "size": [0.5, 0.5], "power": 200})", 1e-6f,
+         0.f},
+        // The sky: of the five shadow directions above the floor (+z with weight 1, four diagonals with cos = 0.577 each),
+        // the wall hides the two towards +x: (1 + 2·0.577) / (1 + 4·0.577) = 0.651 of the open floor's light.
+        {"environment", R"({"type": "environment", "color": [0.55, 0.65, 0.85], "strength": 1})", 0.652f, 0.650f},
+    };
+    for (const EnvCase& c : cases) {
+        SCOPED_TRACE(c.name);
+        const Images open = render(wallScene(c.light, false)), walled = render(wallScene(c.light, true));
+        const float x = -1.f;
+        const float o = at(open.cpu, x);
+        ASSERT_GT(o, 0.01f);
+        EXPECT_NEAR(at(open.gpu, x), o, 1e-3f * o);
+        const float cpu = at(walled.cpu, x), gpu = at(walled.gpu, x);
+        std::printf("%s: floor at x = -1 open %.6g, behind the wall %.6g (CPU) %.6g (GPU): %.4f of the open value\n",
+                    c.name, double(o), double(cpu), double(gpu), double(cpu / o));
+        EXPECT_LE(cpu, c.maxRatio * o);
+        EXPECT_GE(cpu, c.minRatio * o);
+        EXPECT_NEAR(gpu, cpu, 1e-3f * o);
+        // Lit floor far from the wall (x = 3, beyond every shadow): the open value on both sides.
+        EXPECT_NEAR(at(walled.cpu, 3.f), at(open.cpu, 3.f), 1e-6f * at(open.cpu, 3.f));
+        EXPECT_NEAR(at(walled.gpu, 3.f), at(open.gpu, 3.f), 1e-3f * at(open.gpu, 3.f));
+        // Per pixel, the two sides agree except along the edges of the shadow (the walled floor of every view).
+        int differ = 0;
+        for (size_t i = 0; i < walled.cpu.size(); ++i)
+            if (std::abs(walled.cpu[i] - walled.gpu[i]) > 1e-3f * std::max(walled.cpu[i], 1e-3f)) ++differ;
+        EXPECT_LT(differ, int(walled.cpu.size()) / 100) << differ << " channels differ";
+    }
+}
+
+TEST(PreviewShadows, FrameBlockLayoutIsWhatThePackerWrites) {
+    // The std140 offsets a GL program reports for frameBlockGlsl() (the light loop's view of the block) against the C++
+    // offsets packLight and the frame upload write: every frame member and every light field of lights 0 and 1.
+    std::string why;
+    ASSERT_TRUE(gl::context(&why)) << why;
+    const std::string vertex = "#version 450 core\n#define SPC_PREVIEW_FRAME_BINDING 0\n" + preview::frameBlockGlsl() + R"(
+void main() {
+    SpcPreviewLight l = spc_lights[spc_counts.x];
+    gl_Position = spc_view_proj * (spc_eye + spc_forward + l.header + l.position + l.direction + l.edge_v + l.value +
+                                   l.shadow + l.shadow_origin + l.shadow_right + l.shadow_up + l.shadow_axis);
+}
+)";
+    const std::string fragment = "#version 450 core\nlayout(location = 0) out vec4 o;\nvoid main() { o = vec4(1.0); }\n";
+    std::string log;
+    const GLuint prog = gl::program(vertex, fragment, &log);
+    ASSERT_NE(prog, 0u) << log;
+    const std::vector<preview::FieldOffset> fields = preview::frameBlockOffsets();
+    ASSERT_EQ(fields.size(), size_t(4 + 2 * 10));
+    for (const preview::FieldOffset& f : fields) {
+        const GLuint index = glGetProgramResourceIndex(prog, GL_UNIFORM, f.glslName.c_str());
+        ASSERT_NE(index, GL_INVALID_INDEX) << f.glslName;
+        const GLenum prop = GL_OFFSET;
+        GLint offset = -1;
+        glGetProgramResourceiv(prog, GL_UNIFORM, index, 1, &prop, 1, nullptr, &offset);
+        EXPECT_EQ(size_t(offset), f.offset) << f.glslName;
+    }
+    const GLuint block = glGetProgramResourceIndex(prog, GL_UNIFORM_BLOCK, "SpeculaPreviewFrame");
+    ASSERT_NE(block, GL_INVALID_INDEX);
+    const GLenum prop = GL_BUFFER_DATA_SIZE;
+    GLint size = 0;
+    glGetProgramResourceiv(prog, GL_UNIFORM_BLOCK, block, 1, &prop, 1, nullptr, &size);
+    EXPECT_EQ(size_t(size), sizeof(preview::FrameBlock));
+    glDeleteProgram(prog);
+    // packLight puts each fact in its named field.
+    RasterLight r;
+    r.kind = RasterLight::Kind::Quad;
+    r.position = Vec3(1.f, 2.f, 3.f);
+    r.edgeV = Vec3(4.f, 5.f, 6.f);
+    r.twoSided = true;
+    ShadowLight sh;
+    sh.mode = ShadowMode::Directions;
+    sh.firstLayer = 7;
+    sh.reach = 8.f;
+    const preview::PreviewLight l = preview::packLight(r, sh);
+    EXPECT_EQ(l.header[0], float(int(RasterLight::Kind::Quad)));
+    EXPECT_EQ(l.header[3], 1.f);
+    EXPECT_EQ(l.position[1], 2.f);
+    EXPECT_EQ(l.edge_v[2], 6.f);
+    EXPECT_EQ(l.shadow[0], 4.f);
+    EXPECT_EQ(l.shadow[1], 7.f);
+    EXPECT_EQ(l.shadow_origin[3], 8.f);
 }
