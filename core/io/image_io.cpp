@@ -420,6 +420,54 @@ std::string decodedSizeProblem(const std::string& path, const OIIO::ImageSpec& s
            ":1): the file is truncated or damaged";
 }
 
+std::string imageSpecProblem(const std::string& path, const OIIO::ImageSpec& spec, const ImageLimits& limits,
+                             uint64_t claimedBefore) {
+    const uint64_t w = uint64_t(std::max(spec.width, 0)), h = uint64_t(std::max(spec.height, 0));
+    const uint64_t c = uint64_t(std::max(spec.nchannels, 0));
+    const std::string claim = std::to_string(w) + "x" + std::to_string(h) + " pixels, " + std::to_string(c) + " channels";
+    if (spec.depth > 1) return "it is a volume image (depth " + std::to_string(spec.depth) + "); volume images are not supported";
+    if (w == 0 || h == 0 || c == 0) return "its header claims an empty image (" + claim + ")";
+    // Each factor is below 2^31: no overflow.
+    const uint64_t floatBytes = w * h * c * sizeof(float);
+    if (w > uint64_t(limits.maxSide) || h > uint64_t(limits.maxSide) || w * h > uint64_t(limits.maxPixels) ||
+        c > uint64_t(limits.maxChannels) || floatBytes > limits.maxFloatBytes) {
+        std::string bounds;
+        if (limits.maxSide < std::numeric_limits<int64_t>::max())
+            bounds += std::to_string(limits.maxSide) + " pixels a side, ";
+        if (limits.maxPixels / std::max<int64_t>(limits.maxSide, 1) < limits.maxSide)  // a bound beyond side x side
+            bounds += std::to_string(limits.maxPixels) + " pixels, ";
+        bounds += std::to_string(limits.maxChannels) + " channels";
+        if (limits.maxFloatBytes < std::numeric_limits<uint64_t>::max())
+            bounds += " and " + formatBytes(limits.maxFloatBytes) + " of float pixels";
+        return "its header claims " + claim + " (" + formatBytes(floatBytes) + " as floats); " + limits.what +
+               " are limited to " + bounds;
+    }
+    return decodedSizeProblem(path, spec, claimedBefore);
+}
+
+GuardedImage openImageGuarded(const std::string& path, const ImageLimits& limits) {
+    GuardedImage g;
+    g.problem = imageHeaderProblem(path, limits.maxSide, limits.maxPixels);
+    if (!g.problem.empty()) {
+        g.refused = true;
+        return g;
+    }
+    OIIO::ImageSpec config;
+    config.attribute("oiio:UnassociatedAlpha", 1);  // the file's values, unaltered (colour converts unpremultiplied)
+    g.input = OIIO::ImageInput::open(path, &config);
+    if (!g.input) {
+        g.problem = OIIO::geterror();
+        return g;
+    }
+    // Before the pixels: a 300-byte file may claim 100000x100000.
+    g.problem = imageSpecProblem(path, g.input->spec(), limits);
+    if (!g.problem.empty()) {
+        g.refused = true;
+        g.input.reset();
+    }
+    return g;
+}
+
 bool readPixelsAsFloat(OIIO::ImageInput& in, int subimage, float* out) {
     if (!in.seek_subimage(subimage, 0)) return false;
     const OIIO::ImageSpec spec = in.spec();
@@ -443,12 +491,14 @@ bool readPixelsAsFloat(OIIO::ImageInput& in, int subimage, float* out) {
 ImageSet readImageSet(const std::string& path, int64_t maxPixels) {
     std::error_code ec;
     if (!fs::exists(path, ec)) throw ImageIoError("image file not found: '" + path + "'");
-    OIIO::ImageSpec config;
-    config.attribute("oiio:UnassociatedAlpha", 1);  // the file's values, unaltered
-    if (const std::string problem = imageHeaderProblem(path, maxPixels, maxPixels); !problem.empty())
-        throw ImageIoError("cannot read image '" + path + "': " + problem);
-    auto in = OIIO::ImageInput::open(path, &config);
-    if (!in) throw ImageIoError("cannot read image '" + path + "': " + OIIO::geterror());
+    // The header decides the allocation, so it is bounded first: no image this program writes or compares is larger
+    // than the renderer's 2^26 pixels, and none has more than 1024 channels.
+    ImageLimits limits;
+    limits.maxSide = limits.maxPixels = maxPixels;
+    limits.maxChannels = 1024;
+    GuardedImage guarded = openImageGuarded(path, limits);
+    if (!guarded.input) throw ImageIoError("cannot read image '" + path + "': " + guarded.problem);
+    const std::unique_ptr<OIIO::ImageInput>& in = guarded.input;
 
     ImageSet set;
     struct Chan {
@@ -495,17 +545,7 @@ ImageSet readImageSet(const std::string& path, int64_t maxPixels) {
         } else if (spec.width != set.width || spec.height != set.height) {
             continue;  // parts of another size cannot live in one ImageSet
         }
-        if (spec.depth > 1) throw ImageIoError("cannot read '" + path + "': volume images are not supported");
-        // The header decides the allocation, so it is bounded first: no image this program writes or compares is larger
-        // than the renderer's 2^26 pixels, and none has more than 1024 channels.
-        if (spec.width < 1 || spec.height < 1 || int64_t(spec.width) * spec.height > maxPixels || spec.nchannels < 1 ||
-            spec.nchannels > 1024)
-            throw ImageIoError("cannot read '" + path + "': its header declares " + std::to_string(spec.width) + "x" +
-                               std::to_string(spec.height) + " pixels of " + std::to_string(spec.nchannels) +
-                               " channels, beyond the limit of " +
-                               (maxPixels == kMaxImageSetPixels ? std::string("2^26") : std::to_string(maxPixels)) +
-                               " pixels and 1024 channels");
-        if (const std::string problem = decodedSizeProblem(path, spec, claimedBytes); !problem.empty())
+        if (const std::string problem = imageSpecProblem(path, spec, limits, claimedBytes); !problem.empty())
             throw ImageIoError("cannot read '" + path + "': " + problem);
         const uint64_t values = uint64_t(spec.width) * uint64_t(spec.height) * uint64_t(spec.nchannels);
         claimedBytes += values * uint64_t(std::max<size_t>(spec.format.size(), 1));

@@ -5,6 +5,8 @@
 #include <OpenImageIO/imageio.h>
 
 #include <cstdint>
+#include <limits>
+#include <memory>
 #include <string>
 
 namespace specula {
@@ -38,5 +40,32 @@ std::string decodedSizeProblem(const std::string& path, const OIIO::ImageSpec& s
 // (ImageInput::read_scanlines' chunk), and under ASan poisoning that buffer took most of the image fuzzer's time
 // (docs/reliability.md). Returns false with the reader's error pending, as read_image does.
 bool readPixelsAsFloat(OIIO::ImageInput& in, int subimage, float* out);
+
+// ---- the one guarded image open: every image Specula reads (ImageSet files, textures) goes through it ----
+
+// What a header may claim before anything is allocated for its pixels.
+struct ImageLimits {
+    int64_t maxSide = std::numeric_limits<int64_t>::max();   // pixels along either axis
+    int64_t maxPixels = std::numeric_limits<int64_t>::max(); // width x height
+    int maxChannels = 1024;
+    uint64_t maxFloatBytes = std::numeric_limits<uint64_t>::max();  // width x height x channels floats
+    const char* what = "images";  // the plural the refusal names ("textures are limited to ...")
+};
+
+// Why one (sub)image header is refused under 'limits', or "" when it is not: an empty or volume image, a size or
+// channel count beyond the limits, or more pixels than the file's size can decode to (decodedSizeProblem, with
+// claimedBefore as there). The text starts with "its header claims ..." where a size is at fault.
+std::string imageSpecProblem(const std::string& path, const OIIO::ImageSpec& spec, const ImageLimits& limits,
+                             uint64_t claimedBefore = 0);
+
+struct GuardedImage {
+    std::unique_ptr<OIIO::ImageInput> input;  // the open reader at subimage 0; null when refused or unreadable
+    bool refused = false;  // the file broke a limit (a bad input); else OpenImageIO could not open it
+    std::string problem;   // why, without the file's name (the caller names it in its own error)
+};
+// Opens 'path' for reading: the OpenEXR attribute walk (imageHeaderProblem, bounded by limits.maxSide and
+// limits.maxPixels), OpenImageIO's open with straight alpha ("oiio:UnassociatedAlpha": the file's values, unaltered),
+// then imageSpecProblem on the first subimage's header.
+GuardedImage openImageGuarded(const std::string& path, const ImageLimits& limits);
 
 }  // namespace specula

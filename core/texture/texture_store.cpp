@@ -144,7 +144,7 @@ TextureStore::~TextureStore() = default;
 
 namespace {
 
-// A texture is read as floats, converted and MIP-mapped: kMaxTextureTexels per side and kMaxTextureBytes of float
+// A texture is read as floats, converted and MIP-mapped: the texture store's side limit and kMaxTextureBytes of float
 // pixels bound what a header can make us allocate (docs/scene-format.md, issue 16).
 constexpr uint64_t kMaxTextureBytes = uint64_t(4) << 30;
 constexpr uint64_t kMaxTextureFileBytes = uint64_t(4) << 30;
@@ -157,18 +157,11 @@ void checkTextureFileSize(const std::string& path) {
                            formatBytes(kMaxTextureFileBytes));
 }
 
-void checkTextureDimensions(const std::string& path, const OIIO::ImageSpec& spec, int maxSide) {
-    const uint64_t w = uint64_t(std::max(spec.width, 0)), h = uint64_t(std::max(spec.height, 0));
-    const uint64_t c = uint64_t(std::max(spec.nchannels, 0)), d = uint64_t(std::max(spec.depth, 1));
-    const uint64_t bytes = w * h * d * c * sizeof(float);  // each factor < 2^31: no overflow for depth 1
-    const std::string claim = std::to_string(w) + "x" + std::to_string(h) + " pixels, " + std::to_string(c) + " channels";
-    if (w > uint64_t(maxSide) || h > uint64_t(maxSide) || c > 64 || d > 1 || bytes > kMaxTextureBytes)
-        throw TextureInputError("texture '" + path + "': its header claims " + claim + " (" + formatBytes(bytes) +
-                           " as floats); textures are limited to " + std::to_string(maxSide) + " pixels a side, " +
-                           "64 channels and " + formatBytes(kMaxTextureBytes) + " of float pixels");
-    if (const std::string problem = decodedSizeProblem(path, spec); !problem.empty())
-        throw TextureInputError("texture '" + path + "': " + problem);
-    // Read, colour conversion and MIP chain hold about three float copies at once.
+// Read, colour conversion and MIP chain hold about three float copies at once.
+void checkTextureMemory(const std::string& path, const OIIO::ImageSpec& spec) {
+    const uint64_t bytes = uint64_t(spec.width) * uint64_t(spec.height) * uint64_t(spec.nchannels) * sizeof(float);
+    const std::string claim = std::to_string(spec.width) + "x" + std::to_string(spec.height) + " pixels, " +
+                              std::to_string(spec.nchannels) + " channels";
     const MemoryBudget budget = memoryBudget();
     if (3 * bytes > budget.availableBytes)
         throw TextureInputError("texture '" + path + "' (" + claim + ") needs about " + formatBytes(3 * bytes) + " to load, but " +
@@ -229,17 +222,21 @@ TextureHandle TextureStore::load(const std::string& path, const std::string& col
             if (!f.good() && !f.eof()) throw TextureError("cannot read texture '" + path + "'");
             bytes = ss.str();
         }
-        OIIO::ImageSpec readConfig;
-        readConfig.attribute("oiio:UnassociatedAlpha", 1);  // keep straight alpha: colour is converted unpremultiplied
-        if (const std::string problem = imageHeaderProblem(path, I.maxSide, int64_t(I.maxSide) * I.maxSide);
-            !problem.empty())
-            throw TextureInputError("texture '" + path + "': " + problem);
-        auto in = OIIO::ImageInput::open(path, &readConfig);
-        if (!in) throw TextureError("cannot read texture '" + path + "': " + OIIO::geterror());
+        // The one guarded open (core/io/image_read.h): straight alpha (colour is converted unpremultiplied), and
+        // kMaxTextureTexels per side, 64 channels and kMaxTextureBytes of float pixels bound what a header can make us
+        // allocate (docs/scene-format.md, issue 16).
+        ImageLimits limits;
+        limits.maxSide = I.maxSide;
+        limits.maxPixels = int64_t(I.maxSide) * I.maxSide;
+        limits.maxChannels = 64;
+        limits.maxFloatBytes = kMaxTextureBytes;
+        limits.what = "textures";
+        GuardedImage guarded = openImageGuarded(path, limits);
+        if (guarded.refused) throw TextureInputError("texture '" + path + "': " + guarded.problem);
+        if (!guarded.input) throw TextureError("cannot read texture '" + path + "': " + guarded.problem);
+        OIIO::ImageInput* in = guarded.input.get();
         spec = in->spec();
-        checkTextureDimensions(path, spec, I.maxSide);  // before the pixels: a 300 KB file may claim 100000x100000
-        // checkTextureDimensions has refused volumes and more than 64 channels; an empty image is left.
-        if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0) throw TextureError("texture '" + path + "' is empty");
+        checkTextureMemory(path, spec);
         pixels.resize(size_t(spec.width) * size_t(spec.height) * size_t(spec.nchannels));
         if (!readPixelsAsFloat(*in, 0, pixels.data()))
             throw TextureError("cannot read texture '" + path + "': " + in->geterror());
