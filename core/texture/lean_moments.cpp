@@ -86,10 +86,7 @@ LeanPyramid LeanPyramid::fromEncodedPixels(const float* pixels, int width, int h
         const int srcRow = height - 1 - y;  // store bottom-up
         for (int x = 0; x < width; ++x) {
             const float* p = pixels + (size_t(srcRow) * width + x) * size_t(channels);
-            Vec3 n(2.f * p[0] - 1.f, 2.f * p[1] - 1.f, 0.f);
-            n.z = channels >= 3 ? 2.f * p[2] - 1.f : std::sqrt(std::max(0.f, 1.f - n.x * n.x - n.y * n.y));
-            if (directx) n.y = -n.y;
-            base[size_t(y) * width + x] = leanTexelMoments(n);
+            base[size_t(y) * width + x] = leanTexelMoments(decodeNormalPixel(p, channels, directx));
         }
     }
     LeanPyramid P;

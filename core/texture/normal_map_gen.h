@@ -4,6 +4,8 @@
 
 #include "core/math/math.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <stdexcept>
 #include <string>
@@ -80,6 +82,16 @@ inline std::vector<float> encodeNormalMapRgb(const NormalMap& m) {
     for (size_t i = 0; i < m.normals.size(); ++i)
         for (int c = 0; c < 3; ++c) px[i * 3 + size_t(c)] = 0.5f * (m.normals[i][c] + 1.f);
     return px;
+}
+
+// The inverse for one pixel of an encoded map ('channels' >= 2 floats, colour = (n + 1)/2): the tangent-space normal,
+// not normalised; two-channel maps get nz = sqrt(1 - nx² - ny²), and 'directx' flips green (DirectX maps: +Y down).
+// LeanPyramid::fromEncodedPixels and NormalMapLtcPrefilter::normalsFromEncodedPixels decode with it.
+inline Vec3 decodeNormalPixel(const float* p, int channels, bool directx) {
+    Vec3 n(2.f * p[0] - 1.f, 2.f * p[1] - 1.f, 0.f);
+    n.z = channels >= 3 ? 2.f * p[2] - 1.f : std::sqrt(std::max(0.f, 1.f - n.x * n.x - n.y * n.y));
+    if (directx) n.y = -n.y;
+    return n;
 }
 
 // Writes 'map' encoded as colour = (n + 1)/2 (the convention texture.normal_map decodes), chosen by extension:
