@@ -197,40 +197,36 @@ Color3 EnvironmentLight::radiance(const Vec3& wi, bool) const {
 // ---- raster descriptions (the GPU preview and the CPU "raster" integrator) ----------------------------
 namespace specula {
 
-RasterLight PointLight::raster() const {
+namespace {
+// A raster description of one kind: its value, and where it sits and points (RasterLight's defaults for a kind
+// without a position or a direction). The fields only some kinds have are set by those kinds.
+RasterLight rasterLight(RasterLight::Kind kind, const Color3& value, const Vec3& position = RasterLight{}.position,
+                        const Vec3& direction = RasterLight{}.direction) {
     RasterLight r;
-    r.kind = RasterLight::Kind::Point;
-    r.position = p_;
-    r.value = I_;
+    r.kind = kind;
+    r.position = position;
+    r.direction = direction;
+    r.value = value;
     return r;
 }
+}  // namespace
+
+RasterLight PointLight::raster() const { return rasterLight(RasterLight::Kind::Point, I_, p_); }
 
 RasterLight SpotLight::raster() const {
-    RasterLight r;
-    r.kind = RasterLight::Kind::Spot;
-    r.position = p_;
-    r.direction = dir_;
-    r.value = I_;
+    RasterLight r = rasterLight(RasterLight::Kind::Spot, I_, p_, dir_);
     r.cosOuter = cosOuter_;
     r.cosInner = cosInner_;
     return r;
 }
 
 RasterLight DirectionalLight::raster() const {
-    RasterLight r;
-    r.kind = RasterLight::Kind::Directional;
-    r.direction = toLight_;
-    r.value = E_;
-    return r;
+    return rasterLight(RasterLight::Kind::Directional, E_, RasterLight{}.position, toLight_);
 }
 
 RasterLight QuadLight::raster() const {
-    RasterLight r;
-    r.kind = RasterLight::Kind::Quad;
-    r.position = corner_;
-    r.direction = eu_;
+    RasterLight r = rasterLight(RasterLight::Kind::Quad, L_, corner_, eu_);
     r.edgeV = ev_;
-    r.value = L_;
     r.twoSided = twoSided_;
     r.cameraVisible = cameraVisible;
     return r;
@@ -298,9 +294,7 @@ RasterLight MeshLight::raster() const {
 }
 
 RasterLight EnvironmentLight::raster() const {
-    RasterLight r;
-    r.kind = RasterLight::Kind::Environment;
-    r.value = constant_;
+    RasterLight r = rasterLight(RasterLight::Kind::Environment, constant_);
     if (!rgb_.empty()) {
         // Mean radiance over the sphere: texels weighted by their solid angle (∝ sin θ in the lat-long layout).
         double sum[3] = {0, 0, 0}, weight = 0;
