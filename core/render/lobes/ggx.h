@@ -18,12 +18,22 @@ inline float ndf(const Vec3& h, float ax, float ay) {
     return 1.f / (kPi * ax * ay * e * e);
 }
 
-// Smith Λ(w) for the anisotropic GGX distribution (Heitz 2014, Eq. 86).
+// Smith Λ = (−1 + sqrt(1 + α²tan²θ)) / 2 of the GGX distribution (Heitz 2014, Eq. 86) from the direction's projected
+// α²tan²θ: the one home of the formula for both Λ forms, ggx::lambda below (axis-aligned, float) and fggx::lambda /
+// fggx::PreparedGgx::lambda (roughness matrix A, α²tan²θ = w⊥ᵀ A w⊥ / wz², double; A = diag(αx², αy²) is the
+// axis-aligned case). Each form keeps its own precision and operation order, so renders do not change.
+// GLSL twin: spc_ggx_lambda_of_tan2 (nodes/shared/ggx_microfacet.glsl).
+template <class T>
+inline T lambdaOfTan2(T a2tan2) {
+    return T(0.5) * (T(-1) + std::sqrt(T(1) + a2tan2));
+}
+
+// Smith Λ(w) for the anisotropic GGX distribution (Heitz 2014, Eq. 86): α²tan²θ = ((αx wx)² + (αy wy)²) / wz².
 inline float lambda(const Vec3& w, float ax, float ay) {
     float z2 = w.z * w.z;
     if (z2 <= 0.f) return 1e30f;
     float a2tan2 = (sqr(ax * w.x) + sqr(ay * w.y)) / z2;
-    return 0.5f * (-1.f + std::sqrt(1.f + a2tan2));
+    return lambdaOfTan2(a2tan2);
 }
 
 inline float g1(const Vec3& w, float ax, float ay) { return 1.f / (1.f + lambda(w, ax, ay)); }

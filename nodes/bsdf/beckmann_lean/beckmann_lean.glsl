@@ -70,9 +70,6 @@ void spc_bsdf_beckmann_lean(SpeculaClosureQuery q, vec3 weight, float roughness,
     float g = 1.0 / (1.0 + spc_lean_lambda(o, slope, a, b, c) + spc_lean_lambda(i, slope, a, b, c));
     float val = d * g / (4.0 * eo);
     float cw = dot(o, h);
-    vec3 F = vec3(1.0);
-    if (fresnel == SPC_FRESNEL_SCHLICK) F = spc_fresnel_schlick(cw, f0);
-    else if (fresnel == SPC_FRESNEL_DIELECTRIC) F = vec3(spc_fresnel_dielectric(cw, ior));
-    else if (fresnel == SPC_FRESNEL_CONDUCTOR) F = vec3(spc_fresnel_conductor(cw, eta.x, k.x), spc_fresnel_conductor(cw, eta.y, k.y), spc_fresnel_conductor(cw, eta.z, k.z));
+    vec3 F = spc_fresnel_eval(fresnel, cw, f0, ior, eta, k);
     bsdf.f = weight * (F * val);
 }

@@ -78,6 +78,8 @@ inline float ndf(const SlopeGaussian& g, const Vec3& h) {
 // 2007, Eq. 27 with Heitz's Λ form). Returns 1e30 (G1 = 0) for e ≤ 0 or wz ≤ 0.
 inline float meanPlaneCosine(const SlopeGaussian& g, const Vec3& w) { return w.z - (w.x * g.mean.x + w.y * g.mean.y); }
 
+// Not the GGX Λ of ggx::lambdaOfTan2: the Gaussian slope distribution has its own Λ (above); its one GLSL twin is
+// spc_lean_lambda (beckmann_lean.glsl), checked through bsdf.beckmann_lean's node parity test.
 inline float lambda(const SlopeGaussian& g, const Vec3& w) {
     float e = meanPlaneCosine(g, w);
     if (w.z <= 0.f || e <= 0.f) return 1e30f;

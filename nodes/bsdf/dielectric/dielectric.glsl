@@ -21,9 +21,8 @@ void spc_bsdf_dielectric(SpeculaClosureQuery q, vec3 weight, vec3 reflection_tin
                          float anisotropy, float ior, float front_facing, vec3 normal, vec3 tangent, sampler2D ltc_matrix,
                          sampler2D ltc_amplitude, sampler2D ltc_anisotropic, out SpeculaClosure bsdf) {
     bsdf = spc_closure_none();
-    float alpha = roughness * roughness;
-    float aspect = sqrt(max(1.0 - 0.9 * anisotropy, 0.0));
-    float ax = max(alpha / aspect, 1e-4), ay = max(alpha * aspect, 1e-4);
+    vec2 alpha = spc_alpha_from_roughness(roughness, anisotropy);
+    float ax = max(alpha.x, 1e-4), ay = max(alpha.y, 1e-4);  // ggx::kMinAlpha
     float eta = front_facing >= 0.5 ? ior : 1.0 / ior;  // the far side's index over the viewer's
     vec3 T, B, N;
     spc_frame(normal, tangent, T, B, N);
@@ -56,7 +55,7 @@ void spc_bsdf_dielectric(SpeculaClosureQuery q, vec3 weight, vec3 reflection_tin
         if (len > 0.0) {
             h /= len;
             float d = spc_ggx_ndf(h, ax, ay);
-            float g = 1.0 / (1.0 + spc_ggx_lambda(o, ax, ay) + spc_ggx_lambda(i, ax, ay));
+            float g = spc_ggx_g2(o, i, ax, ay);
             f += reflection_tint * (spc_fresnel_dielectric(dot(o, h), eta) * (d * g / (4.0 * o.z)));
         }
     }
@@ -71,7 +70,7 @@ void spc_bsdf_dielectric(SpeculaClosureQuery q, vec3 weight, vec3 reflection_tin
             float denom = (ih + oh / etaP) * (ih + oh / etaP);
             if (oh * o.z > 0.0 && ih * i.z > 0.0 && denom > 0.0) {
                 float d = spc_ggx_ndf(h, ax, ay);
-                float g = 1.0 / (1.0 + spc_ggx_lambda(o, ax, ay) + spc_ggx_lambda(i, ax, ay));
+                float g = spc_ggx_g2(o, i, ax, ay);
                 float fr = spc_fresnel_dielectric(etaP >= 1.0 ? oh : ih, eta);  // from the less dense side
                 f += transmission_tint * ((1.0 - fr) * d * g * abs(ih * oh) / (abs(o.z) * denom * etaP * etaP));
             }

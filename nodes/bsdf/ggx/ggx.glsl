@@ -1,15 +1,14 @@
 // bsdf.ggx: f·cos = weight · F(wo·h) D(h) G2(wo, wi) / (4 wo.z), the GLSL twin of GgxLobe::eval (and of
 // GgxLobe::integratePolygon for polygon queries).
-// D and Λ: shared/ggx_microfacet.glsl; G2 = 1/(1 + Λo + Λi) (Heitz 2014, Eq. 99).
+// α, D, Λ and G2 = 1/(1 + Λo + Λi): shared/ggx_microfacet.glsl; F: shared/fresnel_f0.glsl.
 // Polygon queries (GgxLobe::integratePolygon): the fitted LTC of this lobe (isotropic 64×64 table, or the anisotropic
 // table for αx != αy; shared/ltc.glsl) times F0·mag + (1 − F0)·fres.
 void spc_bsdf_ggx(SpeculaClosureQuery q, vec3 weight, float roughness, float anisotropy, int fresnel, vec3 f0, float ior,
                   vec3 eta, vec3 k, vec3 normal, vec3 tangent, sampler2D ltc_matrix, sampler2D ltc_amplitude,
                   sampler2D ltc_anisotropic, out SpeculaClosure bsdf) {
     bsdf = spc_closure_none();
-    float alpha = roughness * roughness;
-    float aspect = sqrt(max(1.0 - 0.9 * anisotropy, 0.0));
-    float ax = max(alpha / aspect, 1e-4), ay = max(alpha * aspect, 1e-4);
+    vec2 alpha = spc_alpha_from_roughness(roughness, anisotropy);
+    float ax = max(alpha.x, 1e-4), ay = max(alpha.y, 1e-4);  // ggx::kMinAlpha
     if (q.kind != SPC_QUERY_DIRECTION) {  // polygon and environment queries
         vec3 T, B, N;
         spc_frame(normal, tangent, T, B, N);
@@ -25,11 +24,7 @@ void spc_bsdf_ggx(SpeculaClosureQuery q, vec3 weight, float roughness, float ani
     vec3 o, i, h;
     if (!spc_reflection_local(q.wo, q.wi, normal, tangent, o, i, h)) return;
     float d = spc_ggx_ndf(h, ax, ay);
-    float g = 1.0 / (1.0 + spc_ggx_lambda(o, ax, ay) + spc_ggx_lambda(i, ax, ay));
-    float c = dot(o, h);
-    vec3 F = vec3(1.0);
-    if (fresnel == SPC_FRESNEL_SCHLICK) F = spc_fresnel_schlick(c, f0);
-    else if (fresnel == SPC_FRESNEL_DIELECTRIC) F = vec3(spc_fresnel_dielectric(c, ior));
-    else if (fresnel == SPC_FRESNEL_CONDUCTOR) F = vec3(spc_fresnel_conductor(c, eta.x, k.x), spc_fresnel_conductor(c, eta.y, k.y), spc_fresnel_conductor(c, eta.z, k.z));
+    float g = spc_ggx_g2(o, i, ax, ay);
+    vec3 F = spc_fresnel_eval(fresnel, dot(o, h), f0, ior, eta, k);
     bsdf.f = weight * (F * (d * g / (4.0 * o.z)));
 }

@@ -81,11 +81,13 @@ inline double ndf(const D3& h, const Sym2& A, double tau) {
     return 1.0 / (kPiD * std::sqrt(det) * e * e);
 }
 
-// Smith Λ(w) = −1/2 + sqrt(w⊥ᵀ A w⊥ + w_z²) / (2|w_z|)   (TK21 A.3; Λ uses A, the NDF uses A⁻¹)
+// Smith Λ(w) = −1/2 + sqrt(w⊥ᵀ A w⊥ + w_z²) / (2|w_z|)   (TK21 A.3; Λ uses A, the NDF uses A⁻¹): Heitz's Λ
+// (ggx::lambdaOfTan2) of α²tan²θ = w⊥ᵀ A w⊥ / wz², the general form of ggx::lambda (A = diag(αx², αy²)).
+// GLSL twin: spc_ggx_lambda_matrix (nodes/shared/ggx_microfacet.glsl).
 inline double lambda(const D3& w, const Sym2& A) {
     double z2 = w.z * w.z;
     if (z2 <= 0.0) return 1e300;
-    return 0.5 * (-1.0 + std::sqrt(1.0 + std::max(0.0, A.quad(w.x, w.y)) / z2));
+    return ggx::lambdaOfTan2(std::max(0.0, A.quad(w.x, w.y)) / z2);
 }
 inline double g1(const D3& w, const Sym2& A) { return 1.0 / (1.0 + lambda(w, A)); }
 // Height-correlated G2 = 1 / (1 + Λ(i) + Λ(o))   (Heitz 2014, Eq. 99)
@@ -134,7 +136,7 @@ struct PreparedGgx {
     }
     // The bracket of Eq. 1, h⊥ᵀ A⁻¹ h⊥ + h_z²; D(h) = norm / e².
     double ndfBracket(const D3& h) const { return inv.quad(h.x, h.y) + h.z * h.z; }
-    double lambda(const D3& w, double invZ2) const { return 0.5 * (-1.0 + std::sqrt(1.0 + std::max(0.0, A.quad(w.x, w.y)) * invZ2)); }
+    double lambda(const D3& w, double invZ2) const { return ggx::lambdaOfTan2(std::max(0.0, A.quad(w.x, w.y)) * invZ2); }
 };
 
 // ---- Filters (TK21 §3–5) -------------------------------------------------------------------------------------------

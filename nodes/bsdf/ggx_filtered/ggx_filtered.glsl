@@ -12,13 +12,7 @@ float spc_ggxf_ndf(vec3 h, vec3 A, float tau) {
     float e = q + h.z * h.z;
     return 1.0 / (SPC_PI * sqrt(det) * e * e);
 }
-// TK21 A.3: Λ(w) = −1/2 + sqrt(w⊥ᵀ A w⊥ + w_z²) / (2|w_z|)
-float spc_ggxf_lambda(vec3 w, vec3 A) {
-    float z2 = w.z * w.z;
-    if (z2 <= 0.0) return 1e30;
-    float s = max(A.x * w.x * w.x + 2.0 * A.y * w.x * w.y + A.z * w.y * w.y, 0.0);
-    return 0.5 * (-1.0 + sqrt(1.0 + s / z2));
-}
+// Λ and G2 of the matrix GGX (TK21 A.3): spc_ggx_lambda_matrix, spc_ggx_g2_matrix in shared/ggx_microfacet.glsl.
 float spc_ggxf_det(vec3 M) { return M.x * M.z - M.y * M.y; }
 float spc_ggxf_eigmax(vec3 M) {
     float h = 0.5 * (M.x + M.z);
@@ -178,7 +172,7 @@ void spc_bsdf_ggx_filtered(SpeculaClosureQuery q, SpeculaShadingInputs s, vec3 w
     if (len == 0.0) return;
     vec3 h = H / len;
     float d = spc_ggxf_ndf(h, Ab, tau);
-    float g = 1.0 / (1.0 + spc_ggxf_lambda(o, Ab) + spc_ggxf_lambda(i, Ab));
+    float g = spc_ggx_g2_matrix(o, i, Ab);
     vec3 F = spc_fresnel_schlick(dot(o, h), f0);
     bsdf.f = weight * (F * (d * g / (4.0 * o.z)));
 }

@@ -124,7 +124,7 @@ void reg(NodeRegistry& r) {
                              "exact/approximate and isotropic filters. Quad lights in closed form (polygon queries): "
                              "the LTC of its sampling matrix.",
                              kParams, kOutputs, &cpu, kNeedsDerivatives);
-    s.glslLibraries = {"shared/ltc.glsl"};
+    s.glslLibraries = {"shared/ltc.glsl", "shared/ggx_microfacet.glsl"};
     // Polygon queries (LTC quad lights with the sampling matrix): the isotropic/anisotropic GGX fits, mag/fres/sphere.
     s.resources = {ltc::matrixResource(), ltc::amplitudeResource(), ltc::anisotropicResource()};
     r.add(std::move(s));

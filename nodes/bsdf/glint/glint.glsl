@@ -283,10 +283,6 @@ void spc_bsdf_glint(SpeculaClosureQuery q, SpeculaShadingInputs s, sampler1DArra
     float G = min(1.0, 2.0 * h.z * o.z / woh) * min(1.0, 2.0 * h.z * i.z / wih);
     float fc = G * D / (4.0 * o.z);
     if (!(fc > 0.0)) return;
-    vec3 F = vec3(1.0);
-    if (fresnel == SPC_FRESNEL_SCHLICK) F = spc_fresnel_schlick(woh, f0);
-    else if (fresnel == SPC_FRESNEL_DIELECTRIC) F = vec3(spc_fresnel_dielectric(woh, ior));
-    else if (fresnel == SPC_FRESNEL_CONDUCTOR)
-        F = vec3(spc_fresnel_conductor(woh, eta.x, k.x), spc_fresnel_conductor(woh, eta.y, k.y), spc_fresnel_conductor(woh, eta.z, k.z));
+    vec3 F = spc_fresnel_eval(fresnel, woh, f0, ior, eta, k);  // shared/fresnel_f0.glsl
     bsdf.f = (weight * base_color) * (F * fc);
 }

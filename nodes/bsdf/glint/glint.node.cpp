@@ -184,6 +184,7 @@ void reg(NodeRegistry& r) {
     s.resources = {{"dictionary", "sampler1DArray", ResourceSpec::Kind::BuiltinTable,
                     "glint dictionary (Chermain et al. 2020): 64 x 1024 layers RGBA32F, box MIP chain 0..6",
                     &dictionaryTexels}};
+    s.glslLibraries = {"shared/fresnel_f0.glsl"};
     s.gpuSubstituteCpu = &cpuGpuTwin;  // no gpuSubstitute sentence: the GLSL is the model, less integrated quad lights
     s.parityTolerance = 5e-4f;
     s.parityNote = "GGAA off and on: measured 5.3e-5 worst case over 1024 samples on llvmpipe (float vs float, both "

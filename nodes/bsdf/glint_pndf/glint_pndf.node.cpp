@@ -240,7 +240,7 @@ void reg(NodeRegistry& r) {
                       "variance, then bsdf.ggx_filtered with filter none, alpha floor 0.02, Schlick F0 = F(0 deg)): the "
                       "same mean and spread of normals, without the individual glints.";
     s.gpuSubstituteCpu = &cpuSubstitute;
-    s.glslLibraries = {"shared/ltc.glsl", "shared/fresnel_f0.glsl", "texture/lean/lean.glsl",
+    s.glslLibraries = {"shared/ltc.glsl", "shared/fresnel_f0.glsl", "shared/ggx_microfacet.glsl", "texture/lean/lean.glsl",
                        "bsdf/ggx_filtered/ggx_filtered.glsl"};
     s.resources = {{"moments", "sampler2D", ResourceSpec::Kind::DerivedImage,
                     "LEAN slope-moment pyramid of the normal map (the GPU substitute), built on first export",

@@ -1,6 +1,7 @@
 // closure.coat: weight · coat + lerp(1, tint · (1 − E(μo)), weight) · base, the GLSL twin of coat.node.cpp. The coat
 // is GgxLobe with α = max(roughness², 1e-4) and exact dielectric Fresnel; E from the coat_albedo table
-// (coat_albedo.h), interpolated with texelFetch exactly as coat::albedo.
+// (coat_albedo.h), interpolated with texelFetch exactly as coat::albedo. D and G2: shared/ggx_microfacet.glsl (isotropic,
+// αx = αy = α).
 
 // One axis of the table (coat::axis): lower node i0 and upper weight t of v ∈ [0, 1] on n nodes.
 void spc_coat_axis(float v, int n, out int i0, out float t) {
@@ -25,18 +26,6 @@ float spc_coat_albedo(sampler2D tab, float mu, float roughness, float ior) {
     spc_coat_axis(r * r / 0.25, 16, k, tk);
     float a = spc_coat_bilinear(tab, i, ti, j, tj, k), b = spc_coat_bilinear(tab, i, ti, j, tj, k + 1);
     return a + tk * (b - a);
-}
-float spc_coat_ndf(vec3 h, float a) {
-    if (h.z <= 0.0) return 0.0;
-    float hx = h.x / a, hy = h.y / a;  // ggx::ndf's operation order (α ~ 1e-4 amplifies rounding)
-    float e = hx * hx + hy * hy + h.z * h.z;
-    return 1.0 / (SPC_PI * a * a * e * e);
-}
-float spc_coat_lambda(vec3 w, float a) {
-    float z2 = w.z * w.z;
-    if (z2 <= 0.0) return 1e30;
-    float px = a * w.x, py = a * w.y;
-    return 0.5 * (-1.0 + sqrt(1.0 + (px * px + py * py) / z2));
 }
 
 void spc_closure_coat(SpeculaClosureQuery q, SpeculaClosure base, float weight, float roughness, float ior, vec3 tint,
@@ -72,6 +61,6 @@ void spc_closure_coat(SpeculaClosureQuery q, SpeculaClosure base, float weight, 
     float len = sqrt(dot(hs, hs));
     if (len == 0.0) return;
     vec3 h = hs / len;
-    float g = 1.0 / (1.0 + spc_coat_lambda(o, a) + spc_coat_lambda(i, a));
-    bsdf.f += vec3(w * spc_fresnel_dielectric(dot(o, h), eta) * spc_coat_ndf(h, a) * g / (4.0 * o.z));
+    float g = spc_ggx_g2(o, i, a, a);
+    bsdf.f += vec3(w * spc_fresnel_dielectric(dot(o, h), eta) * spc_ggx_ndf(h, a, a) * g / (4.0 * o.z));
 }

@@ -69,7 +69,7 @@ void reg(NodeRegistry& r) {
     s.cpu = &cpu;
     s.glslFunction = "spc_closure_coat";
     s.glslFile = "closure/coat/coat.glsl";
-    s.glslLibraries = {"shared/ltc.glsl"};
+    s.glslLibraries = {"shared/ltc.glsl", "shared/ggx_microfacet.glsl"};
     s.resources = {coat::albedoResource(), ltc::matrixResource(), ltc::amplitudeResource()};
     r.add(std::move(s));
 }
