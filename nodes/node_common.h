@@ -49,6 +49,15 @@ NodeSpec declareNode(const std::string& id, std::string doc, const NodeParams<P>
     s.flags = flags;
     return s;
 }
+// ... for a Fresnel pattern node: pure, and its GLSL function is spc_fresnel_<name>_node, because the prelude's
+// spc_fresnel_<name> is the Fresnel term itself, which the node's function calls (and the BSDFs call too).
+template <class P>
+NodeSpec fresnelNode(const std::string& id, std::string doc, const NodeParams<P>& params, const OutputList& outputs,
+                     CpuFn cpu) {
+    NodeSpec s = declareNode(id, std::move(doc), params, outputs, cpu, kPure);
+    s.glslFunction += "_node";
+    return s;
+}
 // ... for a node without inputs whose outputs are listed in order (e.g. a geometry node: see setOutputs).
 inline NodeSpec declareNode(const std::string& id, std::string doc, std::vector<PortSpec> outputs, CpuFn cpu,
                             uint32_t flags = 0) {

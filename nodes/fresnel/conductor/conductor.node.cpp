@@ -21,15 +21,9 @@ void cpu(EvalContext& c, const Instr& i) {
     set(c, i, kF, Vec3(fresnelConductor(p.cosTheta, p.eta.x, p.k.x), fresnelConductor(p.cosTheta, p.eta.y, p.k.y),
                        fresnelConductor(p.cosTheta, p.eta.z, p.k.z)));
 }
-
-void reg(NodeRegistry& r) {
-    NodeSpec s = declareNode("fresnel.conductor",
-                             "Exact conductor Fresnel reflectance for a complex IOR eta + i k per RGB channel "
-                             "(unpolarised average of r_s and r_p).",
-                             kParams, kOutputs, &cpu, kPure);
-    s.glslFunction = "spc_fresnel_conductor_node";
-    r.add(std::move(s));
-}
 }  // namespace
-SPECULA_REGISTER_NODES(reg);
+SPECULA_REGISTER_NODE(fresnelNode("fresnel.conductor",
+                                  "Exact conductor Fresnel reflectance for a complex IOR eta + i k per RGB channel "
+                                  "(unpolarised average of r_s and r_p).",
+                                  kParams, kOutputs, &cpu));
 }  // namespace specula::nodes

@@ -18,15 +18,9 @@ void cpu(EvalContext& c, const Instr& i) {
     const Params p = kParams.read(c, i);
     set(c, i, kF, fresnelDielectric(p.cosTheta, p.ior));
 }
-
-void reg(NodeRegistry& r) {
-    NodeSpec s = declareNode("fresnel.dielectric",
-                             "Exact unpolarised dielectric Fresnel reflectance for relative IOR (Walter et al. 2007, "
-                             "Eq. 22); 1 under total internal reflection.",
-                             kParams, kOutputs, &cpu, kPure);
-    s.glslFunction = "spc_fresnel_dielectric_node";
-    r.add(std::move(s));
-}
 }  // namespace
-SPECULA_REGISTER_NODES(reg);
+SPECULA_REGISTER_NODE(fresnelNode("fresnel.dielectric",
+                                  "Exact unpolarised dielectric Fresnel reflectance for relative IOR (Walter et al. 2007, "
+                                  "Eq. 22); 1 under total internal reflection.",
+                                  kParams, kOutputs, &cpu));
 }  // namespace specula::nodes

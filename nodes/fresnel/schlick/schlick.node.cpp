@@ -19,14 +19,8 @@ void cpu(EvalContext& c, const Instr& i) {
     const Params p = kParams.read(c, i);
     set(c, i, kF, fresnelSchlick(p.cosTheta, p.f0));
 }
-
-void reg(NodeRegistry& r) {
-    NodeSpec s = declareNode("fresnel.schlick",
-                             "Schlick's approximation F0 + (1 - F0)(1 - cos)^5 (Schlick 1994, Eq. 24).",
-                             kParams, kOutputs, &cpu, kPure);
-    s.glslFunction = "spc_fresnel_schlick_node";
-    r.add(std::move(s));
-}
 }  // namespace
-SPECULA_REGISTER_NODES(reg);
+SPECULA_REGISTER_NODE(fresnelNode("fresnel.schlick",
+                                  "Schlick's approximation F0 + (1 - F0)(1 - cos)^5 (Schlick 1994, Eq. 24).",
+                                  kParams, kOutputs, &cpu));
 }  // namespace specula::nodes
