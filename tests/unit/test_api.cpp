@@ -5,7 +5,7 @@
 
 #include "core/api/specula.h"
 #include "core/graph/node_spec.h"
-#include "core/io/io_module.h"
+#include "core/io_module/io_module.h"
 #include "test_support.h"
 
 #include <gtest/gtest.h>

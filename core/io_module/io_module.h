@@ -1,7 +1,7 @@
 // The OpenImageIO module (libspecula_io.so): every function of core/io/image_io.h,
 // core/texture/texture_store.h and core/texture/normal_map_gen.h is defined twice: for real in the module
 // (built from those .cpp files unchanged, linked with OpenImageIO) and as a forwarding stub in libspecula
-// (core/io/io_module.cpp). The first call of a stub dlopens the module next to libspecula (thread-safe,
+// (core/io_module/io_module.cpp). The first call of a stub dlopens the module next to libspecula (thread-safe,
 // once) and fetches this table; programs that never touch an image never load OpenImageIO (start-up time,
 // issue 9 item 8). Internal to libspecula: not part of the public API.
 #pragma once

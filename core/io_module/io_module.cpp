@@ -1,6 +1,6 @@
-// libspecula side of the OpenImageIO module (core/io/io_module.h): forwarding stubs for image I/O, textures
+// libspecula side of the OpenImageIO module (core/io_module/io_module.h): forwarding stubs for image I/O, textures
 // and normal maps; the first call dlopens libspecula_io.so from libspecula's own folder.
-#include "core/io/io_module.h"
+#include "core/io_module/io_module.h"
 
 #include "core/util/error.h"
 #include "core/util/input_files.h"

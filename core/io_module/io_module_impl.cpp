@@ -1,7 +1,7 @@
-// Module side of the OpenImageIO module (core/io/io_module.h): the table of the real functions, built into
+// Module side of the OpenImageIO module (core/io_module/io_module.h): the table of the real functions, built into
 // libspecula_io.so together with image_io.cpp, texture_store.cpp and normal_map_gen.cpp. Linked with
 // -Bsymbolic-functions, so every name below binds to the module's own definition, not to libspecula's stub.
-#include "core/io/io_module.h"
+#include "core/io_module/io_module.h"
 #include "core/io/image_read.h"
 
 #include "core/util/error.h"
