@@ -97,6 +97,16 @@ ShadowLayout planShadowMaps(const Scene& scene, const std::vector<RasterLight>& 
         size = std::max(16, int(std::sqrt(double(kShadowMaxTexels) / layers)));
     layout.size = size;
 
+    // An orthographic map over the bounding sphere, from 'origin' on its far side along 'axis' (directional, environment).
+    auto orthoView = [&](const Vec3& origin, const Vec3& axis, const Vec3& right, const Vec3& up) {
+        ShadowView v;
+        v.origin = origin, v.axis = axis, v.right = right, v.up = up;
+        v.scale = 1.f / radius;
+        v.zNear = 0.f;
+        v.zFar = radius * 2.02f;
+        v.ortho = true;
+        layout.views.push_back(v);
+    };
     for (size_t i = 0; i < lights.size(); ++i) {
         if (wanted[i] == 0) continue;
         const RasterLight& r = lights[i];
@@ -109,13 +119,7 @@ ShadowLayout planShadowMaps(const Scene& scene, const std::vector<RasterLight>& 
             s.origin = centre - s.axis * (radius * 1.01f);  // on the light's side of the sphere
             s.scale = 1.f / radius;
             s.texelFactor = 2.f / (s.scale * float(size));
-            ShadowView v;
-            v.origin = s.origin, v.axis = s.axis, v.right = s.right, v.up = s.up;
-            v.scale = s.scale;
-            v.zNear = 0.f;
-            v.zFar = radius * 2.02f;
-            v.ortho = true;
-            layout.views.push_back(v);
+            orthoView(s.origin, s.axis, s.right, s.up);
             continue;
         }
         if (r.kind == RasterLight::Kind::Environment) {
@@ -126,13 +130,7 @@ ShadowLayout planShadowMaps(const Scene& scene, const std::vector<RasterLight>& 
             s.texelFactor = 2.f / (s.scale * float(size));
             for (int k = 0; k < kShadowDirections; ++k) {
                 const ShadowFrame& d = shadowDirection(k);
-                ShadowView v;
-                v.origin = s.origin - d.axis * s.reach, v.axis = d.axis, v.right = d.right, v.up = d.up;
-                v.scale = s.scale;
-                v.zNear = 0.f;
-                v.zFar = radius * 2.02f;
-                v.ortho = true;
-                layout.views.push_back(v);
+                orthoView(s.origin - d.axis * s.reach, d.axis, d.right, d.up);
             }
             continue;
         }

@@ -70,18 +70,23 @@ std::string readText(const std::string& path) {
     return s.str();
 }
 
+// Fails with the info log unless a shader or program reached 'status'.
+void check(GLuint obj, GLenum status, void (*getiv)(GLuint, GLenum, GLint*),
+           void (*infoLog)(GLuint, GLsizei, GLsizei*, GLchar*), const char* what) {
+    GLint ok = 0;
+    getiv(obj, status, &ok);
+    if (ok) return;
+    char log[8192];
+    infoLog(obj, sizeof log, nullptr, log);
+    fail(std::string(what) + log);
+}
+
 GLuint compile(GLenum type, const std::string& src) {
     GLuint s = glCreateShader(type);
     const char* c = src.c_str();
     glShaderSource(s, 1, &c, nullptr);
     glCompileShader(s);
-    GLint ok = 0;
-    glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
-    if (!ok) {
-        char log[8192];
-        glGetShaderInfoLog(s, sizeof log, nullptr, log);
-        fail(std::string("shader does not compile: ") + log);
-    }
+    check(s, GL_COMPILE_STATUS, glGetShaderiv, glGetShaderInfoLog, "shader does not compile: ");
     return s;
 }
 
@@ -90,13 +95,7 @@ GLuint link(const std::string& vertex, const std::string& fragment) {
     glAttachShader(p, compile(GL_VERTEX_SHADER, vertex));
     glAttachShader(p, compile(GL_FRAGMENT_SHADER, fragment));
     glLinkProgram(p);
-    GLint ok = 0;
-    glGetProgramiv(p, GL_LINK_STATUS, &ok);
-    if (!ok) {
-        char log[8192];
-        glGetProgramInfoLog(p, sizeof log, nullptr, log);
-        fail(std::string("program does not link: ") + log);
-    }
+    check(p, GL_LINK_STATUS, glGetProgramiv, glGetProgramInfoLog, "program does not link: ");
     return p;
 }
 
@@ -117,10 +116,7 @@ layout(location = 0) in vec3 a_position;
 layout(location = 1) in vec3 a_normal;
 layout(location = 2) in vec4 a_tangent;  // xyz, w = bitangent sign
 layout(location = 3) in vec2 a_uv;
-layout(location = 0) out vec3 v_position;
-layout(location = 1) out vec3 v_normal;
-layout(location = 2) out vec4 v_tangent;
-layout(location = 3) out vec2 v_uv;
+layout(location = 0) out Varyings { vec3 v_position; vec3 v_normal; vec4 v_tangent; vec2 v_uv; };
 void main() {
     v_position = a_position;  // world space: the sphere has no transform
     v_normal = a_normal;
@@ -135,10 +131,7 @@ void main() {
 // in uniform control flow, and lights that do not reach the point are zeroed *after* the call: nodes may take
 // dFdxFine/dFdyFine of their own values (bsdf.ggx_filtered with derivatives "quad"), which needs the whole 2x2 quad.
 const char* kFragmentMain = R"(
-layout(location = 0) in vec3 v_position;
-layout(location = 1) in vec3 v_normal;
-layout(location = 2) in vec4 v_tangent;
-layout(location = 3) in vec2 v_uv;
+layout(location = 0) in Varyings { vec3 v_position; vec3 v_normal; vec4 v_tangent; vec2 v_uv; };  // one block
 layout(location = 0) out vec4 o_color;
 
 void main() {

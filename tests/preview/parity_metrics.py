@@ -43,3 +43,11 @@ def edge_ambiguous(normal, shifted_normals, threshold=0.1):
     for s in shifted_normals:
         amb |= np.abs(s - normal).sum(axis=2) > threshold
     return amb
+
+
+def exit_status(failures):
+    """Prints the failures, if any, on one FAILED line; the test's exit status (1 if any)."""
+    if failures:
+        print("FAILED: " + "; ".join(failures))
+        return 1
+    return 0

@@ -16,7 +16,7 @@ import subprocess
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from parity_metrics import channels, parity  # noqa: E402
+from parity_metrics import channels, exit_status, parity  # noqa: E402
 
 RGB = ("R", "G", "B")
 
@@ -69,10 +69,7 @@ def main():
     if not (changed >= 0.2 and green[:, :, 1].mean() > green[:, :, 0].mean()):
         failures.append("--set did not change the base colour")
 
-    if failures:
-        print("FAILED: " + "; ".join(failures))
-        return 1
-    return 0
+    return exit_status(failures)
 
 
 if __name__ == "__main__":

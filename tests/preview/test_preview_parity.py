@@ -21,7 +21,7 @@ import subprocess
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from parity_metrics import channels, edge_ambiguous, parity  # noqa: E402
+from parity_metrics import channels, edge_ambiguous, exit_status, parity  # noqa: E402
 
 # Scenes whose preview does not yet match per pixel (docs/preview.md "Parity"): none, measured 2026-12-03.
 KNOWN_GAPS = set()
@@ -98,10 +98,7 @@ def main():
                                                                          sum(1 for r in rows if " gap " in r)))
     if newly_passing:
         print("now passing (remove from KNOWN_GAPS): " + ", ".join(newly_passing))
-    if failures:
-        print("FAILED: " + "; ".join(failures))
-        return 1
-    return 0
+    return exit_status(failures)
 
 
 if __name__ == "__main__":
