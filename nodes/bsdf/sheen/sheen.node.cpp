@@ -28,21 +28,16 @@ void cpu(EvalContext& c, const Instr& i) {
 }
 
 void reg(NodeRegistry& r) {
-    NodeSpec s;
-    s.id = "bsdf.sheen";
-    s.category = "bsdf";
-    s.doc = "Charlie sheen for cloth and dust (Estevez & Kulla 2017): D = (2 + 1/α) sin(θh)^(1/α) / (2π) with their "
-            "fitted Λ, G2 = 1/(1 + Λo + Λi). Quad lights are sampled (no closed form).";
+    // id "bsdf.sheen": category bsdf, GLSL spc_bsdf_sheen in bsdf/sheen/sheen.glsl (declareNode, nodes/node_common.h).
+    NodeSpec s = declareNode("bsdf.sheen",
+                             "Charlie sheen for cloth and dust (Estevez & Kulla 2017): D = (2 + 1/α) sin(θh)^(1/α) / "
+                             "(2π) with their fitted Λ, G2 = 1/(1 + Λo + Λi). Quad lights are sampled (no closed form).",
+                             kParams, kOutputs, &cpu);
     s.notes = "f·cos θi = color · D(h) G2(wo, wi) / (4 cos θo), α = roughness clamped to [0.08, 1] (below, the fitted "
               "Λ lets the albedo exceed 1 at grazing views); Λ(θ) = exp(L(cos θ)) below 60°, exp(2 L(0.5) − L(1 − cos θ)) "
               "above, L(x) = a/(1 + b x^c) + d x + e with the paper's Table 1 coefficients interpolated in (1 − α)². "
               "Sampled uniformly over the hemisphere. CPU: SheenLobe (nodes/bsdf/sheen/sheen_lobe.h); GLSL: spc_bsdf_sheen "
               "(nodes/bsdf/sheen/sheen.glsl), which answers polygon queries as partial (the host samples the lobe).";
-    kParams.describe(s);
-    s.outputs = kOutputs.ports();
-    s.cpu = &cpu;
-    s.glslFunction = "spc_bsdf_sheen";
-    s.glslFile = "bsdf/sheen/sheen.glsl";
     r.add(std::move(s));
 }
 
