@@ -1,4 +1,5 @@
 // math.length.<type>: Euclidean length |v|.
+#include "nodes/math/squared_length.h"
 #include "nodes/node_common.h"
 
 #include <cmath>
@@ -13,9 +14,7 @@ struct Length {
             return NodeParams<Args>().typed("v", &Args::v, t, 0.f, "vector").range(-2.f, 2.f);
         }
         float eval() const {
-            float l2 = v[0] * v[0];
-            for (int k = 1; k < W; ++k) l2 += v[k] * v[k];
-            return std::sqrt(l2);
+            return std::sqrt(squaredLength(v));
         }
     };
 };

@@ -1,4 +1,5 @@
 // math.normalize.<type>: v / |v|, and 0 for the zero vector.
+#include "nodes/math/squared_length.h"
 #include "nodes/node_common.h"
 
 #include <cmath>
@@ -13,9 +14,7 @@ struct Normalize {
             return NodeParams<Args>().typed("v", &Args::v, t, 0.f, "vector").range(-2.f, 2.f);
         }
         FloatN<W> eval() const {
-            float l2 = v[0] * v[0];
-            for (int k = 1; k < W; ++k) l2 += v[k] * v[k];
-            float l = std::sqrt(l2);
+            const float l2 = squaredLength(v), l = std::sqrt(l2);
             FloatN<W> o;
             for (int k = 0; k < W; ++k) o[k] = l2 > 0.f ? v[k] / l : 0.f;
             return o;
