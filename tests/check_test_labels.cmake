@@ -1,7 +1,8 @@
 # Guard of the per-test labels of tests/CMakeLists.txt (run by the ctest test `test_labels`): every unit test named
 # there for a label is a test ctest lists with that label, so a renamed or removed test fails here instead of silently
-# losing its label (and running, for example, in the sanitizer job). Arguments: -DCTEST=<ctest> -DBUILD=<build dir>
-# -DLISTS=<file that sets SPECULA_<LABEL>_UNIT_TESTS for LABELS> -DLABELS=<label,label,...>.
+# losing its label (and running, for example, in the sanitizer job, or in ./scripts/test when it is slow).
+# Arguments: -DCTEST=<ctest> -DBUILD=<build dir> -DLISTS=<file that sets SPECULA_<LABEL>_UNIT_TESTS for LABELS>
+# -DLABELS=<label,label,...>.
 include(${LISTS})
 string(REPLACE "," ";" labels "${LABELS}")
 set(missing "")
@@ -22,5 +23,11 @@ if(missing)
   list(JOIN missing "\n  " text)
   message(FATAL_ERROR "tests named in tests/CMakeLists.txt that ctest does not list with that label:\n  ${text}")
 endif()
-list(LENGTH SPECULA_HEAVY_UNIT_TESTS n)
-message(STATUS "labels: all ${n} heavy unit tests and the soak test carry their labels")
+set(counts "")
+foreach(label ${labels})
+  string(TOUPPER ${label} upper)
+  list(LENGTH SPECULA_${upper}_UNIT_TESTS n)
+  list(APPEND counts "${n} ${label}")
+endforeach()
+list(JOIN counts ", " counts)
+message(STATUS "labels: every listed test carries its label (${counts})")
