@@ -115,6 +115,60 @@ void BM_BuildOnly(benchmark::State& state) {
         arena.reset();
     }
 }
+// Batches of 32 shading points (issue 37: the renderer's camera stage shades a tile row at once): the graph's
+// Program::shadeBatch against the hand-written set-up in the same loop shape, then one evaluation per point.
+constexpr size_t kBatch = 32;
+struct Batch {
+    std::vector<ShadingPoint> sps;
+    std::vector<const ShadingPoint*> ptrs;
+    std::vector<Closure> closures = std::vector<Closure>(kBatch);
+    std::vector<Closure*> outs;
+    Batch() {
+        for (size_t k = 0; k < kBatch; ++k) {
+            ShadingPoint sp = point();
+            sp.n = sp.ng = glm::normalize(Vec3(0.1f + 0.01f * float(k), 0.2f - 0.005f * float(k), 1.f));
+            sps.push_back(sp);
+        }
+        for (size_t k = 0; k < kBatch; ++k) {
+            ptrs.push_back(&sps[k]);
+            outs.push_back(&closures[k]);
+        }
+    }
+};
+void BM_GgxGraphBatch(benchmark::State& state) {
+    Setup& s = setup();
+    ScratchArena arena;
+    Batch b;
+    size_t k = 0;
+    for (auto _ : state) {
+        s.mat->shadeBatch(b.ptrs.data(), kBatch, arena, b.outs.data());
+        for (size_t i = 0; i < kBatch; ++i, ++k) {
+            BsdfEval e = b.closures[i].evalPdf({s.dirs[k & 63], s.dirs[(k * 7 + 3) & 63]}).f;
+            benchmark::DoNotOptimize(e);
+        }
+        arena.reset();
+    }
+}
+void BM_GgxDirectBatch(benchmark::State& state) {
+    Setup& s = setup();
+    ScratchArena arena;
+    Batch b;
+    HandWritten m;
+    size_t k = 0;
+    for (auto _ : state) {
+        for (size_t i = 0; i < kBatch; ++i) {
+            benchmark::DoNotOptimize(b.sps[i]);
+            m.build(b.sps[i], arena, b.closures[i]);
+        }
+        for (size_t i = 0; i < kBatch; ++i, ++k) {
+            BsdfEval e = b.closures[i].evalPdf({s.dirs[k & 63], s.dirs[(k * 7 + 3) & 63]}).f;
+            benchmark::DoNotOptimize(e);
+        }
+        arena.reset();
+    }
+}
+BENCHMARK(BM_GgxDirectBatch)->Repetitions(5)->ReportAggregatesOnly(true);
+BENCHMARK(BM_GgxGraphBatch)->Repetitions(5)->ReportAggregatesOnly(true);
 BENCHMARK(BM_ShadeOnly)->Repetitions(3)->ReportAggregatesOnly(true);
 BENCHMARK(BM_BuildOnly)->Repetitions(3)->ReportAggregatesOnly(true);
 BENCHMARK(BM_GgxDirect)->Repetitions(5)->ReportAggregatesOnly(true);
@@ -133,6 +187,11 @@ int main(int argc, char** argv) {
             double g = rep.medianNs["BM_GgxGraph"], d = rep.medianNs["BM_GgxDirect"];
             std::printf("graph/direct GGX (shade+eval) median: %.2f ns / %.2f ns = ratio %.3f (overhead %+.1f%%, "
                         "target <= +10%%)\n", g, d, g / d, (g / d - 1.0) * 100.0);
+        }
+        if (rep.medianNs.count("BM_GgxGraphBatch") && rep.medianNs.count("BM_GgxDirectBatch")) {
+            double g = rep.medianNs["BM_GgxGraphBatch"] / kBatch, d = rep.medianNs["BM_GgxDirectBatch"] / kBatch;
+            std::printf("batched graph/direct GGX (shade+eval, %zu points per batch) median per point: %.2f ns / %.2f ns "
+                        "= ratio %.3f (overhead %+.1f%%, target <= +10%%)\n", kBatch, g, d, g / d, (g / d - 1.0) * 100.0);
         }
     });
 }

@@ -38,6 +38,13 @@ inline NodeSpec declareNode(const std::string& id, std::string doc) {
     s.glslFile = category + "/" + name + "/" + name + ".glsl";
     return s;
 }
+// The batch entry of a node's CPU function (NodeSpec::cpuBatch, Program::shadeBatch): F inlined into one loop over the
+// batch's points, so the interpreter calls the node once per batch and consecutive points' dependent divisions and
+// square roots overlap (issue 37). The same arithmetic per point as F, so images keep their bits.
+template <CpuFn F>
+void batchOf(EvalContext* ctx, size_t n, const Instr& ins) {
+    for (size_t k = 0; k < n; ++k) F(ctx[k], ins);
+}
 // ... with the parts most nodes have: the parameter struct (its ports are the inputs), the outputs, the CPU entry.
 template <class P>
 NodeSpec declareNode(const std::string& id, std::string doc, const NodeParams<P>& params, const OutputList& outputs,

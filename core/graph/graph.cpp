@@ -385,6 +385,7 @@ Program Program::compile(const GraphDesc& g, const std::vector<std::pair<int, in
         std::fill(std::begin(ins.in), std::end(ins.in), kNoRegister);
         std::fill(std::begin(ins.out), std::end(ins.out), kNoRegister);
         ins.fn = load && load->gpuSubstitutes && spec.gpuSubstituteCpu ? spec.gpuSubstituteCpu : spec.cpu;
+        ins.batchFn = ins.fn == spec.cpu ? spec.cpuBatch : nullptr;
         bool allConst = true;
         uint32_t dynamicPorts = 0;  // inputs that vary per shading point: bindings and outputs of unfolded nodes
         std::vector<std::string> strings(spec.inputs.size());
@@ -540,6 +541,55 @@ void Program::shade(const ShadingPoint& sp, ScratchArena& arena, Closure* out, C
     Closure* cl[kStackSlots];
     Color3 em[kStackSlots];
     execute(sp, arena, r, cl, em, out, emission, false);
+}
+
+void Program::shadeBatch(const ShadingPoint* const* sps, size_t n, ScratchArena& arena, Closure* const* out,
+                         Color3* emission) const {
+    // Registers, closure pools and contexts of a sub-batch live on the stack; a program too large for a useful
+    // sub-batch is shaded point by point.
+    constexpr size_t kStackFloats = 4096, kStackSlots = 512, kMaxBatch = 64;
+    const size_t regs = std::max<size_t>(tmpl_.size(), 1), slots = std::max<size_t>(slots_, 1);
+    const size_t sub = std::min({kMaxBatch, kStackFloats / regs, kStackSlots / slots});
+    if (sub < 4) {
+        for (size_t k = 0; k < n; ++k) shade(*sps[k], arena, out[k], emission ? &emission[k] : nullptr);
+        return;
+    }
+    alignas(16) float r[kStackFloats];
+    Closure* cl[kStackSlots];
+    Color3 em[kStackSlots];
+    EvalContext ctx[kMaxBatch];
+    for (size_t begin = 0; begin < n; begin += sub) {
+        const size_t m = std::min(sub, n - begin);
+        for (size_t k = 0; k < m; ++k) {
+            float* rk = r + k * regs;
+            Closure** clk = cl + k * slots;
+            Color3* emk = em + k * slots;
+            const ShadingPoint& sp = *sps[begin + k];
+            // The per-point prologue of execute(), point by point.
+            if (readsTemplate_) std::memcpy(rk, tmpl_.data(), tmpl_.size() * sizeof(float));
+            for (size_t s = 0; s < slots_; ++s) {
+                emk[s] = Color3(0.f);
+                clk[s] = int(s) == outSlot_ ? out[begin + k] : new (arena.allocate(sizeof(Closure), alignof(Closure))) Closure();
+            }
+            for (const Load& l : prologue_) loadBinding(l.binding, sp, rk + l.reg);
+            EvalContext& c = ctx[k];
+            c.r = rk;
+            c.constants = tmpl_.data();
+            c.sp = &sp;
+            c.arena = &arena;
+            c.closures = clk;
+            c.emission = emk;
+        }
+        for (const Instr& ins : code_) {
+            if (ins.batchFn) {
+                ins.batchFn(ctx, m, ins);
+            } else {
+                for (size_t k = 0; k < m; ++k) ins.fn(ctx[k], ins);
+            }
+        }
+        if (emission)
+            for (size_t k = 0; k < m; ++k) emission[begin + k] = outSlot_ >= 0 ? em[k * slots + size_t(outSlot_)] : Color3(0.f);
+    }
 }
 
 }  // namespace specula::graph

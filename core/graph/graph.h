@@ -67,6 +67,12 @@ public:
     // Same as run() for the renderer's hot path: registers and the closure pool live on the stack
     // when small (no arena traffic besides the lobes).
     void shade(const ShadingPoint& sp, ScratchArena& arena, Closure* out, Color3* emission) const;
+    // shade() of n points in one pass over the instructions (issue 37 item 1): each node runs once per batch (its
+    // NodeSpec::cpuBatch, or its cpu per point), so the interpreter's frame is paid per batch, not per point. Computes
+    // exactly what shade(*sps[k], arena, out[k], emission ? &emission[k] : nullptr) computes for every k; all lobes
+    // go to 'arena'.
+    void shadeBatch(const ShadingPoint* const* sps, size_t n, ScratchArena& arena, Closure* const* out,
+                    Color3* emission) const;
 
     uint16_t rootRegister(size_t i) const { return rootRegs_[i]; }
     size_t instructionCount() const { return code_.size(); }

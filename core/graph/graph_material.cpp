@@ -8,6 +8,12 @@ void GraphMaterial::shade(const ShadingPoint& sp, ScratchArena& arena, Closure& 
     program_.shade(sp, arena, &out, emission);
 }
 
+void GraphMaterial::shadeBatch(const ShadingPoint* const* sps, size_t n, ScratchArena& arena, Closure* const* out,
+                               Color3* emission) const {
+    for (size_t k = 0; k < n; ++k) out[k]->clear();
+    program_.shadeBatch(sps, n, arena, out, emission);
+}
+
 std::shared_ptr<Material> loadGraphMaterial(const nlohmann::json& material, const std::string& jsonPointer,
                                             const GraphLoadContext& ctx) {
     graph::GraphDesc desc = graph::parseGraph(material, jsonPointer);

@@ -161,6 +161,9 @@ struct Instr;
 struct EvalContext;
 // CPU entry of a node: reads its input registers, writes its output registers.
 using CpuFn = void (*)(EvalContext& ctx, const Instr& ins);
+// The same for a batch of shading points (Program::shadeBatch: one call per node per batch, issue 37): ctx[k] is the
+// k-th point's context. Must compute exactly what n calls of the node's CpuFn compute, in any order of the points.
+using CpuBatchFn = void (*)(EvalContext* ctx, size_t n, const Instr& ins);
 
 // Per-instance preparation (string/enum literals and uniform numeric literals -> opaque data such as a texture handle
 // or tables fitted for one roughness).
@@ -219,6 +222,9 @@ struct NodeSpec {
     std::vector<ResourceSpec> resources;  // GPU resources of the GLSL function, in parameter-name order
     uint32_t flags = 0;
     CpuFn cpu = nullptr;
+    // Optional batch entry of cpu (nodes/node_common.h batchOf<&cpu>: the node's function inlined into one loop over
+    // the points, so consecutive points' latency chains overlap). Null: Program::shadeBatch calls cpu per point.
+    CpuBatchFn cpuBatch = nullptr;
     PrepareFn prepare = nullptr;
     std::string glslFunction;  // GLSL function name (overloads allowed across typed variants)
     std::string glslFile;      // path of the .glsl relative to nodes/ (embedded into the binary)
@@ -261,6 +267,7 @@ constexpr uint16_t kNoRegister = 0xFFFF;
 // for enum ports in[k] holds the chosen enum index directly.
 struct Instr {
     CpuFn fn = nullptr;
+    CpuBatchFn batchFn = nullptr;  // NodeSpec::cpuBatch when fn is NodeSpec::cpu; else null (fn per point)
     const void* data = nullptr;  // prepared per-instance data (PrepareFn), owned by the program
     uint16_t in[kMaxInputs];
     uint16_t out[kMaxOutputs];

@@ -74,6 +74,49 @@ bool Accel::intersect(const Ray& ray, Hit& hit) const {
     return true;
 }
 
+void Accel::intersectStream(const Ray* rays, size_t n, Hit* hits, uint8_t* found) const {
+    constexpr size_t kChunk = 64;
+    RTCRayHit rh[kChunk];
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    for (size_t begin = 0; begin < n; begin += kChunk) {
+        const size_t m = std::min(kChunk, n - begin);
+        for (size_t k = 0; k < m; ++k) {
+            const Ray& ray = rays[begin + k];
+            if (gRayObserver) gRayObserver->onRay(ray, false);
+            RTCRayHit& r = rh[k];
+            r.ray.org_x = ray.o.x;
+            r.ray.org_y = ray.o.y;
+            r.ray.org_z = ray.o.z;
+            r.ray.dir_x = ray.d.x;
+            r.ray.dir_y = ray.d.y;
+            r.ray.dir_z = ray.d.z;
+            r.ray.tnear = ray.tMin;
+            r.ray.tfar = ray.tMax;
+            r.ray.time = 0.f;
+            r.ray.mask = 0xFFFFFFFF;
+            r.ray.id = unsigned(k);
+            r.ray.flags = 0;
+            r.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+            r.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+        }
+        rtcIntersect1M(impl_->scene, &ctx, rh, unsigned(m), sizeof(RTCRayHit));
+        for (size_t k = 0; k < m; ++k) {
+            const RTCRayHit& r = rh[k];
+            Hit& hit = hits[begin + k];
+            found[begin + k] = r.hit.geomID != RTC_INVALID_GEOMETRY_ID;
+            if (!found[begin + k]) continue;
+            hit.t = r.ray.tfar;
+            hit.shape = r.hit.geomID;
+            hit.prim = r.hit.primID;
+            hit.b1 = r.hit.u;
+            hit.b2 = r.hit.v;
+            refineHit(rays[begin + k], hit);
+        }
+    }
+}
+
 bool Accel::embreeIntersect(const Ray& ray, Hit& hit) const {
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);

@@ -35,6 +35,11 @@ public:
     Accel& operator=(const Accel&) = delete;
 
     bool intersect(const Ray& ray, Hit& hit) const;
+    // n rays traced as one coherent stream (Embree's rtcIntersect1M; camera rays of neighbouring pixels, issue 37):
+    // found[k] = 1 and hits[k] set where rays[k] hits, each hit refined as intersect() refines it, so a ray gets the
+    // same bits here as through intersect() whenever Embree picks the same triangle (the stream and single-ray
+    // kernels agree on the triangle; they may differ in t and u, v, which refineHit recomputes).
+    void intersectStream(const Ray* rays, size_t n, Hit* hits, uint8_t* found) const;
     bool occluded(const Ray& ray) const;
     // Embree's answer alone: rtcIntersect1 / rtcOccluded1 on this BVH, without the exact recomputation of the hit
     // (refineHit) and unobserved. For bench_embree_limit, the renderer's lower bound (issue 15 item 2).

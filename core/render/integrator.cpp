@@ -120,9 +120,9 @@ Color3 Integrator::meshLightEmission(const LightSample& ls, const Vec3& p, Scrat
 
 // A camera ray passes through the geometry of lights the camera does not see (Light::cameraVisible): the ray is
 // traced again beyond each such hit (the same ray, a larger tMin, so its differentials stay the camera's).
-bool Integrator::intersectFromCamera(const Ray& cameraRay, Hit& hit) const {
+bool Integrator::intersectFromCamera(const Ray& cameraRay, Hit& hit, int firstPass) const {
     Ray r = cameraRay;
-    for (int pass = 0; pass < 64; ++pass) {
+    for (int pass = firstPass; pass < 64; ++pass) {
         if (!accel_.intersect(r, hit)) return false;
         const int light = scene_.shapes[hit.shape].areaLight;
         if (light < 0 || scene_.lights[size_t(light)]->cameraVisible) return true;
@@ -131,15 +131,81 @@ bool Integrator::intersectFromCamera(const Ray& cameraRay, Hit& hit) const {
     return false;  // 64 invisible lights in a row: treated as a miss
 }
 
+void Integrator::shadeCameraHits(const RayDifferential* rays, size_t n, ScratchArena& arena, CameraVertex* out) const {
+    constexpr size_t kBatch = 64;
+    Ray plain[kBatch];
+    Hit hits[kBatch];
+    uint8_t found[kBatch];
+    for (size_t begin = 0; begin < n; begin += kBatch) {
+        const size_t m = std::min(kBatch, n - begin);
+        for (size_t k = 0; k < m; ++k) plain[k] = rays[begin + k];
+        accel_.intersectStream(plain, m, hits, found);
+        // Shapes grouped by material: the shading points of each material, in ray order.
+        const ShadingPoint* sps[kBatch];
+        Closure* closures[kBatch];
+        Color3 emission[kBatch];
+        uint32_t materialOf[kBatch];
+        size_t vertexOf[kBatch];
+        size_t shadedCount = 0;
+        for (size_t k = 0; k < m; ++k) {
+            CameraVertex& v = out[begin + k];
+            v.shaded = false;
+            v.found = found[k];
+            Hit hit = hits[k];
+            if (v.found) {
+                // A light the camera does not see: the rest of intersectFromCamera's passes, ray by ray.
+                const int light = scene_.shapes[hit.shape].areaLight;
+                if (light >= 0 && !scene_.lights[size_t(light)]->cameraVisible) {
+                    Ray r = plain[k];
+                    r.tMin = std::nextafter(hit.t, std::numeric_limits<float>::infinity()) * (1.f + 1e-6f);
+                    v.found = intersectFromCamera(r, hit, 1);
+                }
+            }
+            if (!v.found) continue;
+            v.hit = hit;
+            v.sp = accel_.shadingPoint(rays[begin + k], hit, derivatives_[hit.shape]);
+            if (scene_.shapes[hit.shape].areaLight >= 0) continue;  // lights do not scatter: li answers alone
+            v.sp.depth = 0;
+            v.shaded = true;
+            materialOf[shadedCount] = uint32_t(scene_.shapes[hit.shape].material);
+            vertexOf[shadedCount] = begin + k;
+            closures[shadedCount] = &v.closure;
+            sps[shadedCount++] = &v.sp;
+        }
+        // Each material shades its points in one call; the order of materials does not change any point's result.
+        bool done[kBatch] = {};
+        for (size_t i = 0; i < shadedCount; ++i) {
+            if (done[i]) continue;
+            const uint32_t mat = materialOf[i];
+            const ShadingPoint* groupSp[kBatch];
+            Closure* groupCl[kBatch];
+            size_t group[kBatch], g = 0;
+            for (size_t j = i; j < shadedCount; ++j) {
+                if (materialOf[j] != mat) continue;
+                done[j] = true;
+                group[g] = j;
+                groupSp[g] = sps[j];
+                groupCl[g++] = closures[j];
+            }
+            Color3 groupLe[kBatch];
+            scene_.materials[mat]->shadeBatch(groupSp, g, arena, groupCl, groupLe);
+            for (size_t q = 0; q < g; ++q) emission[group[q]] = groupLe[q];
+        }
+        for (size_t i = 0; i < shadedCount; ++i)
+            out[vertexOf[i]].Le = scene_.materials[materialOf[i]]->isEmissive() ? emission[i] : Color3(0.f);
+    }
+}
+
 SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampler, ScratchArena& arena,
-                           const QuadRays* quad) const {
+                           const QuadRays* quad, const CameraVertex* first) const {
     SampleValue out;
     Hit hit;
-    if (!intersectFromCamera(cameraRay, hit)) {
+    if (first ? !first->found : !intersectFromCamera(cameraRay, hit)) {
         out.beauty = environment(glm::normalize(cameraRay.d));
         return out;
     }
-    ShadingPoint sp = accel_.shadingPoint(cameraRay, hit, derivatives_[hit.shape]);
+    if (first) hit = first->hit;
+    ShadingPoint sp = first ? first->sp : accel_.shadingPoint(cameraRay, hit, derivatives_[hit.shape]);
     {
         const ShapeInstance& sh = scene_.shapes[hit.shape];
         out.depth = hit.t * glm::dot(cameraRay.d, scene_.camera.lookAt - scene_.camera.position) /
@@ -164,7 +230,7 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
 
     // One closure for the whole path, cleared at each vertex: constructing it (8 lobe slots with their frames) at every
     // vertex was a measurable part of a vertex's cost (issue 15). Its lobes live in the arena, reset with the vertex.
-    Closure closure;
+    Closure pathClosure;
     for (int depth = 0;; ++depth) {
         sampler.setDimension(firstBounceDim + uint32_t(depth) * dimsPerBounce_);
         arena.reset();
@@ -202,10 +268,17 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
             sp.hasDifferentials = sp.hasDifferentials || (sp.quad[0].valid && sp.quad[1].valid);
         }
         const Material& material = *scene_.materials[scene_.shapes[sp.shapeId].material];
-        closure.clear();
+        // The camera vertex may come shaded from the batched camera stage (shadeCameraHits), with the same bits.
+        const bool preShaded = depth == 0 && first;
         Color3 Le(0.f);
-        // One shading pass gives the closure and the emission; the shading point stays const while it runs.
-        material.shade(sp, arena, closure, material.isEmissive() ? &Le : nullptr);
+        if (preShaded) {
+            Le = first->Le;
+        } else {
+            pathClosure.clear();
+            // One shading pass gives the closure and the emission; the shading point stays const while it runs.
+            material.shade(sp, arena, pathClosure, material.isEmissive() ? &Le : nullptr);
+        }
+        const Closure& closure = preShaded ? first->closure : pathClosure;
         if (material.isEmissive()) {
             if (depth == 0) {
                 emitted += Le;

@@ -44,19 +44,37 @@ inline float rasterSpotFalloff(float cosAngle, const RasterLight& r) {
     return t * t * (3.f - 2.f * t);
 }
 
+// A camera sample's first vertex, traced and shaded ahead of Integrator::li by the batched camera stage
+// (Integrator::shadeCameraHits, issue 37): what li would compute there itself, the same bits.
+struct CameraVertex {
+    bool found = false;   // the ray hit a surface the camera sees
+    bool shaded = false;  // sp, closure and Le are set (false on a light's own geometry: lights do not scatter)
+    Hit hit;
+    ShadingPoint sp;
+    Closure closure;      // its lobes live in the arena given to shadeCameraHits
+    Color3 Le{0.f};       // emission towards the camera (emissive materials)
+};
+
 class Integrator {
 public:
     Integrator(const Scene& scene, const Accel& accel);
     ~Integrator();
     // Radiance along a camera ray. 'arena' is reset at every path vertex. With 'quad', the camera hit's differentials
-    // are the fine finite differences to the quad partners' hits and sp.quad holds their shaded frames.
+    // are the fine finite differences to the quad partners' hits and sp.quad holds their shaded frames. With 'first',
+    // the camera vertex comes from shadeCameraHits for this ray (quad must be null then).
     SampleValue li(const RayDifferential& cameraRay, PixelSampler& sampler, ScratchArena& arena,
-                   const QuadRays* quad = nullptr) const;
+                   const QuadRays* quad = nullptr, const CameraVertex* first = nullptr) const;
+    // The batched camera stage (issue 37 item 1): traces n camera rays as one coherent Embree stream, builds their
+    // shading points, and shades them grouped by material, each material once per batch (Material::shadeBatch).
+    // out[k] is what li(rays[k], ...) computes at its first vertex; the lobes go to 'arena', which must outlive the
+    // li calls that use them.
+    void shadeCameraHits(const RayDifferential* rays, size_t n, ScratchArena& arena, CameraVertex* out) const;
 
 private:
     // Radiance arriving from escaped rays (sum over environment lights).
     Color3 environment(const Vec3& dir) const;
-    bool intersectFromCamera(const Ray& cameraRay, Hit& hit) const;
+    // firstPass: the passes already made (shadeCameraHits makes the first one in its stream).
+    bool intersectFromCamera(const Ray& cameraRay, Hit& hit, int firstPass = 0) const;
     Color3 meshLightEmission(const LightSample& ls, const Vec3& p, ScratchArena& arena) const;
     // render.integrator "raster": the GPU preview's direct lighting at a camera hit, delta lights shadowed by the
     // preview's shadow maps (docs/preview.md).

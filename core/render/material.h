@@ -15,6 +15,13 @@ public:
     // Builds the closure at sp (lobes allocated in arena, each with its own frame) and, if 'emission' is given,
     // the radiance emitted towards sp.wo, in the same pass.
     virtual void shade(const ShadingPoint& sp, ScratchArena& arena, Closure& out, Color3* emission = nullptr) const = 0;
+    // shade() of n points at once (the renderer's batched camera hits, issue 37): out[k] and, if given, emission[k]
+    // for *sps[k], exactly as n calls of shade() give them; all lobes in 'arena'. A material that can amortise its
+    // per-shade work over the batch (GraphMaterial: one interpreter pass per batch) overrides it.
+    virtual void shadeBatch(const ShadingPoint* const* sps, size_t n, ScratchArena& arena, Closure* const* out,
+                            Color3* emission = nullptr) const {
+        for (size_t k = 0; k < n; ++k) shade(*sps[k], arena, *out[k], emission ? &emission[k] : nullptr);
+    }
     virtual bool isEmissive() const { return false; }
     // Whether shading reads the screen-space differentials (dp/dx, duv/dx, dn/dx, dwo/dx, the quad partners) or the
     // normal's partials dn/du, dn/dv they are built from. When false the renderer skips building them (issue 15: they

@@ -128,6 +128,7 @@ RenderOutput renderScene(const Scene& scene, const RenderOptions& options) {
     Integrator integrator(scene, accel);
     const float diffScale = std::max(0.125f, 1.f / std::sqrt(float(rs.spp)));
 
+    const bool batched = options.batchedCameraHits && rs.derivatives != DerivativeMode::Quad;
     const int tile = std::max(1, rs.tile);
     const int tilesX = (W + tile - 1) / tile, tilesY = (H + tile - 1) / tile;
     const int tileCount = tilesX * tilesY;
@@ -145,7 +146,90 @@ RenderOutput renderScene(const Scene& scene, const RenderOptions& options) {
         const int tx1 = std::min(tx0 + tile, crop.x1), ty1 = std::min(ty0 + tile, crop.y1);
         ScratchArena arena;
         uint64_t tileSamples = 0, tileInvalid = 0;
-        for (int y = ty0; y < ty1; ++y) {
+        // The film write of one pixel's accumulated samples.
+        auto writePixel = [&](int x, int y, const Accum& acc) {
+            const size_t pix = size_t(y - crop.y0) * W + (x - crop.x0);
+            if (countAov) countAov->pixels[pix] = float(acc.n);
+            if (acc.n > 0) {
+                // A farm piece keeps sums (the merge divides by the total count of all pieces).
+                const float inv = splitPiece ? 1.f : 1.f / float(acc.n);
+                auto put3 = [&](AovBuffer* b, const Vec3& c) {
+                    b->pixels[pix * 3 + 0] = c.x;
+                    b->pixels[pix * 3 + 1] = c.y;
+                    b->pixels[pix * 3 + 2] = c.z;
+                };
+                put3(beauty, acc.beauty * inv);
+                put3(diffuse, acc.diffuse * inv);
+                put3(specular, acc.specular * inv);
+                put3(albedo, acc.albedo * inv);
+                put3(normal, acc.normal * inv);
+                uvAov->pixels[pix * 2 + 0] = acc.uv.x * inv;
+                uvAov->pixels[pix * 2 + 1] = acc.uv.y * inv;
+                depthAov->pixels[pix] = float(acc.depth * inv);
+            }
+        };
+        // The camera sample s of pixel (x, y): its sampler, after the pixel and lens dimensions, and its ray.
+        auto cameraSample = [&](int x, int y, int s, PixelSampler& sampler, Vec2& uLens) {
+            sampler = PixelSampler(uint32_t(x), uint32_t(y), uint32_t(s), rs.seed);
+            Vec2 off = filterOffset(rs, sampler.get2D());
+            uLens = sampler.get2D();
+            RayDifferential ray = camera.generateRay(x + 0.5f + off.x, y + 0.5f + off.y, uLens);
+            ray.scaleDifferentials(diffScale);
+            ray.pixelOffset = off;
+            return ray;
+        };
+        if (batched) {
+            // Row by row, one sample index at a time across the row: the row's camera rays are one coherent stream
+            // and their hits are shaded per material in one pass; each pixel still adds its samples in index order,
+            // so the sums are those of the pixel-by-pixel loop below.
+            const int rowWidth = tx1 - tx0;
+            const size_t width = static_cast<size_t>(rowWidth);
+            std::vector<Accum> acc(width), blockAcc(width);
+            std::vector<PixelSampler> samplers(width, PixelSampler(0, 0, 0, 0));
+            std::vector<RayDifferential> rays(width);
+            std::vector<CameraVertex> first(width);
+            ScratchArena cameraArena;
+            for (int y = ty0; y < ty1; ++y) {
+                if (options.cancel && options.cancel->load()) {
+                    cancelled = true;
+                    return;  // tile stays partially rendered; counted as not done
+                }
+                std::fill(acc.begin(), acc.end(), Accum{});
+                std::fill(blockAcc.begin(), blockAcc.end(), Accum{});
+                bool firstBlock = true;
+                for (int s = sampleBegin; s < sampleEnd; ++s) {
+                    if (s > sampleBegin && s % block == 0) {
+                        for (int i = 0; i < rowWidth; ++i) {
+                            foldBlock(acc[size_t(i)], blockAcc[size_t(i)], firstBlock, severalBlocks);
+                            blockAcc[size_t(i)] = Accum{};
+                        }
+                        firstBlock = false;
+                    }
+                    if ((s & 31) == 31 && options.cancel && options.cancel->load(std::memory_order_relaxed)) {
+                        cancelled = true;
+                        return;
+                    }
+                    Vec2 uLens;
+                    for (int i = 0; i < rowWidth; ++i) rays[size_t(i)] = cameraSample(tx0 + i, y, s, samplers[size_t(i)], uLens);
+                    cameraArena.reset();
+                    integrator.shadeCameraHits(rays.data(), size_t(rowWidth), cameraArena, first.data());
+                    for (int i = 0; i < rowWidth; ++i) {
+                        SampleValue v = integrator.li(rays[size_t(i)], samplers[size_t(i)], arena, nullptr, &first[size_t(i)]);
+                        ++tileSamples;
+                        if (!finiteSample(v)) {
+                            ++tileInvalid;
+                            continue;
+                        }
+                        blockAcc[size_t(i)].add(v, v.depth, 1);
+                    }
+                }
+                for (int i = 0; i < rowWidth; ++i) {
+                    foldBlock(acc[size_t(i)], blockAcc[size_t(i)], firstBlock, severalBlocks);
+                    writePixel(tx0 + i, y, acc[size_t(i)]);
+                }
+            }
+        }
+        for (int y = ty0; y < (batched ? ty0 : ty1); ++y) {
             if (options.cancel && options.cancel->load()) {
                 cancelled = true;
                 return;  // tile stays partially rendered; counted as not done
@@ -166,12 +250,10 @@ RenderOutput renderScene(const Scene& scene, const RenderOptions& options) {
                         cancelled = true;
                         return;
                     }
-                    PixelSampler sampler(uint32_t(x), uint32_t(y), uint32_t(s), rs.seed);
-                    Vec2 off = filterOffset(rs, sampler.get2D());
-                    Vec2 uLens = sampler.get2D();
-                    RayDifferential ray = camera.generateRay(x + 0.5f + off.x, y + 0.5f + off.y, uLens);
-                    ray.scaleDifferentials(diffScale);
-                    ray.pixelOffset = off;
+                    PixelSampler sampler(0, 0, 0, 0);
+                    Vec2 uLens;
+                    RayDifferential ray = cameraSample(x, y, s, sampler, uLens);
+                    const Vec2 off = ray.pixelOffset;
                     QuadRays quad;
                     if (rs.derivatives == DerivativeMode::Quad) {
                         // Partners in the aligned 2×2 quad (absolute pixel coordinates), same sub-pixel offset and lens
@@ -191,25 +273,7 @@ RenderOutput renderScene(const Scene& scene, const RenderOptions& options) {
                     blockAcc.add(v, v.depth, 1);
                 }
                 foldBlock(acc, blockAcc, firstBlock, severalBlocks);
-                const size_t pix = size_t(y - crop.y0) * W + (x - crop.x0);
-                if (countAov) countAov->pixels[pix] = float(acc.n);
-                if (acc.n > 0) {
-                    // A farm piece keeps sums (the merge divides by the total count of all pieces).
-                    const float inv = splitPiece ? 1.f : 1.f / float(acc.n);
-                    auto put3 = [&](AovBuffer* b, const Vec3& c) {
-                        b->pixels[pix * 3 + 0] = c.x;
-                        b->pixels[pix * 3 + 1] = c.y;
-                        b->pixels[pix * 3 + 2] = c.z;
-                    };
-                    put3(beauty, acc.beauty * inv);
-                    put3(diffuse, acc.diffuse * inv);
-                    put3(specular, acc.specular * inv);
-                    put3(albedo, acc.albedo * inv);
-                    put3(normal, acc.normal * inv);
-                    uvAov->pixels[pix * 2 + 0] = acc.uv.x * inv;
-                    uvAov->pixels[pix * 2 + 1] = acc.uv.y * inv;
-                    depthAov->pixels[pix] = float(acc.depth * inv);
-                }
+                writePixel(x, y, acc);
             }
         }
         samples += tileSamples;
@@ -244,6 +308,7 @@ RenderOutput renderScene(const Scene& scene, const RenderOptions& options) {
 
     out.stats.samples = samples.load();
     out.stats.invalidSamples = invalid.load();
+    out.stats.batchedSamples = batched ? samples.load() : 0;
     out.stats.tilesDone = tilesDone.load();
     out.stats.tilesTotal = tileCount;
     out.stats.cancelled = cancelled.load();

@@ -27,6 +27,7 @@ struct RenderProgress {
 struct RenderStats {
     uint64_t samples = 0;         // camera samples taken
     uint64_t invalidSamples = 0;  // NaN/Inf samples (counted, never accumulated)
+    uint64_t batchedSamples = 0;  // samples whose camera vertex came from the batched camera stage
     double seconds = 0;
     int tilesDone = 0, tilesTotal = 0;
     bool cancelled = false;
@@ -41,6 +42,11 @@ struct RenderOptions {
     // (kRenderBytesPerPixel per pixel, kBvhBytesPerTriangle per triangle) exceeds the memory this process can still get
     // (core/util/memory_budget.h) is refused before anything is allocated.
     uint64_t maxMemoryBytes = 0;
+    // The batched camera stage (issue 37 item 1): each tile row's camera rays of one sample index are traced as one
+    // Embree stream and their hits shaded per material in one pass (Integrator::shadeCameraHits). The image is the
+    // same bits either way; false renders pixel by pixel (tests compare the two). Quad derivatives
+    // (render.derivatives "quad") always render pixel by pixel.
+    bool batchedCameraHits = true;
 };
 
 // The memory estimate of renderScene: the film's 19 floats per pixel, and a copy of them while the EXR and PNG are

@@ -55,6 +55,7 @@ void reg(NodeRegistry& r) {
     s.glslLibraries = {"shared/ltc.glsl", "shared/fresnel_f0.glsl"};
     // Polygon queries (LTC quad lights through the equivalent GGX): the GGX fits and the mag/fres/sphere table.
     s.resources = {ltc::matrixResource(), ltc::amplitudeResource(), ltc::anisotropicResource()};
+    s.cpuBatch = &batchOf<&cpu>;  // Program::shadeBatch: one call per batch
     r.add(std::move(s));
 }
 

@@ -71,6 +71,7 @@ void reg(NodeRegistry& r) {
     s.glslLibraries = {"shared/ltc.glsl", "shared/ggx_microfacet.glsl"};
     // Polygon and environment queries of the reflection: bsdf.ggx's LTC tables.
     s.resources = {ltc::matrixResource(), ltc::amplitudeResource(), ltc::anisotropicResource()};
+    s.cpuBatch = &batchOf<&cpu>;  // Program::shadeBatch: one call per batch
     r.add(std::move(s));
 }
 

@@ -33,6 +33,7 @@ void reg(NodeRegistry& r) {
     s.glslLibraries = {"shared/ltc.glsl"};
     // Polygon queries: the clip-free horizon reads the sphere channel of the shared LTC amplitude table.
     s.resources = {ltc::amplitudeResource()};
+    s.cpuBatch = &batchOf<&cpu>;  // Program::shadeBatch: one call per batch
     r.add(std::move(s));
 }
 

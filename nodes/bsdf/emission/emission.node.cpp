@@ -28,6 +28,7 @@ void reg(NodeRegistry& r) {
                              "Emission closure: radiance color·strength (both sides), no scattering.",
                              kParams, kOutputs, &cpu, kEmissive);
     s.notes = "No lobes: emission only.";
+    s.cpuBatch = &batchOf<&cpu>;  // Program::shadeBatch: one call per batch
     r.add(std::move(s));
 }
 

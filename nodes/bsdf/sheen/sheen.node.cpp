@@ -38,6 +38,7 @@ void reg(NodeRegistry& r) {
               "above, L(x) = a/(1 + b x^c) + d x + e with the paper's Table 1 coefficients interpolated in (1 − α)². "
               "Sampled uniformly over the hemisphere. CPU: SheenLobe (nodes/bsdf/sheen/sheen_lobe.h); GLSL: spc_bsdf_sheen "
               "(nodes/bsdf/sheen/sheen.glsl), which answers polygon queries as partial (the host samples the lobe).";
+    s.cpuBatch = &batchOf<&cpu>;  // Program::shadeBatch: one call per batch
     r.add(std::move(s));
 }
 

@@ -27,6 +27,7 @@ void cpu(EvalContext& c, const Instr& i) {
 void reg(NodeRegistry& r) {
     NodeSpec s = declareNode("closure.add", "Sum of two closures a + b.", kParams, kOutputs, &cpu);
     s.notes = "Lobes are concatenated, at most `Closure::kMaxLobes` = 8.";
+    s.cpuBatch = &batchOf<&cpu>;  // Program::shadeBatch: one call per batch
     r.add(std::move(s));
 }
 }  // namespace

@@ -71,6 +71,7 @@ void reg(NodeRegistry& r) {
     s.glslFile = "closure/coat/coat.glsl";
     s.glslLibraries = {"shared/ltc.glsl", "shared/ggx_microfacet.glsl"};
     s.resources = {coat::albedoResource(), ltc::matrixResource(), ltc::amplitudeResource()};
+    s.cpuBatch = &batchOf<&cpu>;  // Program::shadeBatch: one call per batch
     r.add(std::move(s));
 }
 

@@ -29,6 +29,7 @@ void cpu(EvalContext& c, const Instr& i) {
 void reg(NodeRegistry& r) {
     NodeSpec s = declareNode("closure.mix", "Blend of two closures a·(1 − t) + b·t.", kParams, kOutputs, &cpu);
     s.notes = "Lobe weights and emission are scaled.";
+    s.cpuBatch = &batchOf<&cpu>;  // Program::shadeBatch: one call per batch
     r.add(std::move(s));
 }
 }  // namespace

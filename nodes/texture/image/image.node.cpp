@@ -156,6 +156,7 @@ void reg(NodeRegistry& r) {
     s.parityNote = "against the GPU twin (GL rules on the same MIP chain, footprints included): colour and alpha within "
                    "llvmpipe's bilinear-weight rounding (8.4e-5 at zero footprint); the texture gradients divide a "
                    "difference of two lookups by two texels (x8 on the 16-texel test image): measured 2.95e-3";
+    s.cpuBatch = &batchOf<&cpu>;  // Program::shadeBatch: one call per batch
     r.add(std::move(s));
 }
 

@@ -130,6 +130,7 @@ void reg(NodeRegistry& r) {
     s.parityNote = "the parity image has texels below the horizon (slopes clamped to 16, moments up to 256); the mean "
                    "and covariance of mixed footprints are small differences of such sums (FMA contraction on llvmpipe), "
                    "measured 1.1e-4";
+    s.cpuBatch = &batchOf<&cpu>;  // Program::shadeBatch: one call per batch
     r.add(std::move(s));
 }
 

@@ -75,6 +75,7 @@ void reg(NodeRegistry& r) {
               "`strength`, T Gram-Schmidt-orthogonalised to N.";
     s.parityTolerance = 2e-4f;
     s.parityNote = "frame construction + renormalisation (sqrt/divide, FMA contraction on llvmpipe), measured 9.0e-5";
+    s.cpuBatch = &batchOf<&cpu>;  // Program::shadeBatch: one call per batch
     r.add(std::move(s));
 }
 
