@@ -381,3 +381,77 @@ TEST(GraphMaterial, NeedsDerivativesOnlyWhenANodeOrABindingReadsThem) {
     unused["f"] = {{"type", "bsdf.ggx_filtered"}};
     EXPECT_FALSE(load({{"nodes", unused}, {"output", "@sum.bsdf"}})->needsDerivatives());
 }
+
+// Program::shadeBatch (issue 37: the renderer's batched camera stage) computes what shade() computes point by point:
+// the same closure bits and emission, for a program of nodes with a batch entry (batch of up to 64), one whose
+// register file allows only sub-batches (a 300-node chain: 600+ registers), and one too large to batch at all (a
+// 2,100-node chain, shaded point by point inside shadeBatch).
+TEST(GraphMaterial, ShadeBatchEqualsShadePerPointForEveryBatchShape) {
+    auto chained = [](int length) {
+        json nodes = {{"uv", {{"type", "geometry.uv"}}}};
+        std::string prev = "@uv.uv";
+        for (int i = 0; i < length; ++i) {
+            const std::string id = "c" + std::to_string(i);
+            nodes[id] = {{"type", "math.add.vec2"}, {"inputs", {{"a", prev}, {"b", {0.001, -0.0005}}}}};
+            prev = "@" + id + ".out";
+        }
+        nodes["len"] = {{"type", "math.length.vec2"}, {"inputs", {{"v", prev}}}};
+        nodes["rough"] = {{"type", "math.clamp.float"}, {"inputs", {{"x", "@len.out"}, {"lo", 0.05}, {"hi", 1.0}}}};
+        nodes["g"] = {{"type", "bsdf.ggx"}, {"inputs", {{"roughness", "@rough.out"}, {"anisotropy", 0.3}}}};
+        nodes["e"] = {{"type", "bsdf.emission"}, {"inputs", {{"color", {0.5, 0.25, 1.0}}, {"strength", "@len.out"}}}};
+        nodes["sum"] = {{"type", "closure.add"}, {"inputs", {{"a", "@g.bsdf"}, {"b", "@e.bsdf"}}}};
+        return json{{"nodes", nodes}, {"output", "@sum.bsdf"}};
+    };
+    json direct = {{"nodes",
+                    {{"g", {{"type", "bsdf.ggx"}, {"inputs", {{"roughness", 0.4}, {"anisotropy", 0.6}, {"f0", {0.9, 0.6, 0.5}}}}}},
+                     {"d", {{"type", "bsdf.diffuse"}, {"inputs", {{"color", 0.5}}}}},
+                     {"sum", {{"type", "closure.add"}, {"inputs", {{"a", "@g.bsdf"}, {"b", "@d.bsdf"}}}}}}},
+                   {"output", "@sum.bsdf"}};
+    struct Case {
+        const char* name;
+        json graph;
+        size_t minRegisters;
+    };
+    const Case cases[] = {{"batch-entry nodes", direct, 0}, {"sub-batches", chained(300), 600}, {"too large", chained(2100), 4096}};
+    constexpr size_t kPoints = 75;  // more than one batch of 64, and a remainder
+    for (const Case& c : cases) {
+        SCOPED_TRACE(c.name);
+        auto mat = load(c.graph);
+        const Program& prog = std::dynamic_pointer_cast<GraphMaterial>(mat)->program();
+        EXPECT_GE(prog.registerCount(), c.minRegisters);
+        std::vector<ShadingPoint> sps(kPoints, makeSp());
+        std::vector<const ShadingPoint*> ptrs;
+        std::vector<Closure> batched(kPoints);
+        std::vector<Closure*> outs;
+        for (size_t k = 0; k < kPoints; ++k) {
+            sps[k].n = glm::normalize(Vec3(0.02f * float(k) - 0.7f, 0.3f - 0.01f * float(k), 1.f));
+            sps[k].uv = Vec2(0.013f * float(k), 0.5f - 0.004f * float(k));
+            sps[k].tangent = Vec4(1.f, 0.05f * float(k % 7), 0.f, 1.f);
+            ptrs.push_back(&sps[k]);
+            outs.push_back(&batched[k]);
+        }
+        ScratchArena batchArena;
+        std::vector<Color3> batchedLe(kPoints, Color3(-1.f));
+        dirtyStack();
+        mat->shadeBatch(ptrs.data(), kPoints, batchArena, outs.data(), batchedLe.data());
+        for (size_t k = 0; k < kPoints; ++k) {
+            ScratchArena arena;
+            Closure single;
+            Color3 Le(-1.f);
+            mat->shade(sps[k], arena, single, &Le);
+            ASSERT_EQ(single.size(), batched[k].size()) << k;
+            ASSERT_GT(single.size(), 0) << k;
+            for (int c3 = 0; c3 < 3; ++c3) EXPECT_EQ(Le[c3], batchedLe[k][c3]) << k;
+            for (int q = 0; q < 6; ++q) {
+                const Vec3 wo = glm::normalize(Vec3(0.2f * q - 0.5f, 0.3f, 1.f)), wi = glm::normalize(Vec3(0.4f, -0.1f * q, 0.9f));
+                const BsdfEval a = test::query(single, wo, wi).f, b = test::query(batched[k], wo, wi).f;
+                for (int c3 = 0; c3 < 3; ++c3) {
+                    EXPECT_EQ(a.specular[c3], b.specular[c3]) << k;
+                    EXPECT_EQ(a.diffuse[c3], b.diffuse[c3]) << k;
+                }
+            }
+        }
+        // The chain's emission strength varies with uv, so a point shaded with another point's registers would show.
+        if (c.minRegisters > 0) EXPECT_NE(batchedLe[0][0], batchedLe[kPoints - 1][0]);
+    }
+}
