@@ -10,6 +10,10 @@
 #include <atomic>
 #include <cstdint>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 namespace specula::glint {
 
 constexpr int kCellCap = 100;  // the GLSL's cap on evaluated cells per LOD (spec §3 S3); hits are counted
@@ -83,13 +87,12 @@ inline int forEachCell(int l, Vec2 uv, Vec2 a1, Vec2 a2, Visit&& visit) {
 // the same terms in the same order as levelSdf/patchSdf (empty cells and cells zeroed by S4.8 add an exact 0), so
 // the result is bit-identical to the per-query pipeline. Sampling uses the normalised weights
 // w_c = (blend weight) W_c / sum_level W of the non-empty cells.
-struct GlintCell {
-    float weight;         // W_c (EWA weight, unnormalised)
-    float cosT, sinT;     // Rot(theta_c), theta_c = 2 pi u_theta
-    uint16_t rowX, rowY;  // k_c * N + i_c and k_c * N + j_c: the dictionary rows; rowX = kConverged: k = L (P_B)
-    uint8_t loX, hiX, loY, hiY;  // the rows' nonzero MIP-0 texels (rowSupport)
-    static constexpr uint16_t kConverged = 0xffff;
-};
+//
+// Layout (issue 37 item 3): structure of arrays, each level's cells starting at a multiple of kLanes, so a query's
+// first pass (rotation, S4.8, the support test, the GGAA kernel size) runs kLanes cells at a time without branches.
+// That pass does the same float operations per cell as the scalar code (mul, add, abs, div, compare; no FMA, no
+// reciprocal), so every CPU gets the same bits, with or without SSE2. Padding lanes are dead (cos = sin = 0 rotates
+// to m = 0, an empty support [lo, hi] = [kRes, -1] rejects every lookup, rho = 0).
 
 // The two SDFs one query needs: the GGAA-filtered one (what eval returns) and the unfiltered one (the density the
 // glint sampler draws from); equal when GGAA is off.
@@ -98,22 +101,32 @@ struct GlintSdfPair {
 };
 
 struct GlintCellSet {
-    static constexpr int kMaxCells = 2 * kCellCap;  // two LODs, each capped by forEachCell
+    static constexpr int kLanes = 4;                                 // cells per step of a query's first pass
+    static constexpr int kLevelCapacity = (kCellCap + kLanes - 1) / kLanes * kLanes;  // forEachCell's cap, padded
+    static constexpr int kMaxCells = 2 * kLevelCapacity;             // two LODs
+    static constexpr int16_t kConverged = -1;  // rowX of a cell with k = L (analytic P_B, S4.6)
     bool footprintValid = false;  // false: |a2| = 0, P = P_B (spec S1 recommendation)
-    int count = 0;                // non-empty cells (dictionary and converged) in cells[0, count)
+    int count = 0;                // non-empty cells (dictionary and converged) of both levels
     int levels = 0;               // 1 or 2 LODs
-    int levelEnd[2] = {0, 0};     // cells of level n: [levelEnd[n-1], levelEnd[n])
+    int levelBegin[2] = {0, 0};   // cells of level n: [levelBegin[n], levelEnd[n]); levelBegin[n] % kLanes == 0
+    int levelEnd[2] = {0, 0};
     float sumW[2] = {0.f, 0.f};   // sum of W over every visited cell of the level (empty ones included)
     float blend = 0.f;            // w: P = (1 - w) P_lev(i0) + w P_lev(i0 + 1)
     float convergedWeight = 0.f;  // sum of the normalised weights of the converged cells
     float keptWeight = 0.f;       // sum of all normalised weights = the integral of the unfiltered P (spec §4.6)
-    GlintCell cells[kMaxCells];   // left uninitialised until build()
-
-    // The sampling weight of cell n: (blend weight of its level) W / sum W.
-    float normalisedWeight(int n) const {
-        const int lev = n < levelEnd[0] ? 0 : 1;
-        return (lev == 0 ? (levels == 2 ? 1.f - blend : 1.f) : blend) * cells[n].weight / sumW[lev];
-    }
+    // Per cell, left uninitialised until build(): W_c (EWA weight, unnormalised), its normalised sampling weight
+    // (0 when sum W of its level is 0), Rot(theta_c) with theta_c = 2 pi u_theta, the dictionary rows k_c N + i_c and
+    // k_c N + j_c (kConverged: k = L), and the rows' nonzero MIP-0 texels [lo, hi] (rowSupport).
+    alignas(16) float weight[kMaxCells];
+    alignas(16) float sampleWeight[kMaxCells];
+    alignas(16) float cosT[kMaxCells];
+    alignas(16) float sinT[kMaxCells];
+    alignas(16) int16_t rowX[kMaxCells];
+    alignas(16) int16_t rowY[kMaxCells];
+    alignas(16) int16_t loX[kMaxCells];
+    alignas(16) int16_t hiX[kMaxCells];
+    alignas(16) int16_t loY[kMaxCells];
+    alignas(16) int16_t hiY[kMaxCells];
 
     // S2 + S3 + S4.1-S4.9 without h~. Empty cells (u_A > A) are not stored (they only normalise).
     void build(const Dictionary& dict, const GlintParams& p, Vec2 uv, const Footprint& fp) {
@@ -132,11 +145,18 @@ struct GlintCellSet {
         const uint8_t* support = rowSupport(dict);
         addLevel(memo, support, p, i0, uv, fp);
         if (blend > 0.f) addLevel(memo, support, p, std::min(i0 + 1, kLevels - 1), uv, fp);
-        for (int n = 0; n < count; ++n) {
-            if (!(sumW[n < levelEnd[0] ? 0 : 1] > 0.f)) continue;
-            const float w = normalisedWeight(n);
-            keptWeight += w;
-            if (cells[n].rowX == GlintCell::kConverged) convergedWeight += w;
+        for (int lev = 0; lev < levels; ++lev) {
+            // (blend weight of the level) W / sum W, in cell order as the sampler walks them.
+            const float levelWeight = lev == 0 ? (levels == 2 ? 1.f - blend : 1.f) : blend;
+            const bool normalises = sumW[lev] > 0.f;
+            for (int n = levelBegin[lev]; n < levelEnd[lev]; ++n) {
+                sampleWeight[n] = 0.f;
+                if (!normalises) continue;
+                const float w = levelWeight * weight[n] / sumW[lev];
+                sampleWeight[n] = w;
+                keptWeight += w;
+                if (rowX[n] == kConverged) convergedWeight += w;
+            }
         }
     }
 
@@ -158,71 +178,40 @@ struct GlintCellSet {
         const float* base = dict.data().data();
         float levelF[2] = {0.f, 0.f}, levelU[2] = {0.f, 0.f};
         for (int lev = 0; lev < levels; ++lev) {
-            const int begin = lev == 0 ? 0 : levelEnd[0], end = levelEnd[lev];
-            // Pass 1: rotation, the S4.8 test, and the support test (a lookup that reads only zero texels is 0; with
-            // GGAA only where the kernel is under one texel, rho <= 1, so MIP 0 is what is read). The surviving
-            // cells' texels are prefetched: the rows (1.5 MB in all) are read at random, so the lookups are bound by
-            // memory latency, not arithmetic. Order is kept: the sums below add the same terms as levelSdf.
-            struct Lookup {
-                int cell;
-                float ux, uy, rhoX, rhoY;
-                bool outX, outY;  // the axis's MIP-0 lookup reads only zeros
-            };
-            Lookup live[kCellCap];
-            int nLive = 0;
-            for (int n = begin; n < end; ++n) {
-                const GlintCell& c = cells[n];
-                if (c.rowX == GlintCell::kConverged) {
-                    live[nLive++] = {n, 0.f, 0.f, 0.f, 0.f, false, false};
-                    continue;
-                }
-                if (dictionaryZero) continue;
-                const float mx = c.cosT * mh.x + c.sinT * mh.y, my = -c.sinT * mh.x + c.cosT * mh.y;
-                if (std::abs(mx) >= lim || std::abs(my) >= lim) continue;  // S4.8
-                const float ux = std::abs(mx) / lim, uy = std::abs(my) / lim;
-                const bool outX = lookupOutsideSupport(ux, c.loX, c.hiX), outY = lookupOutsideSupport(uy, c.loY, c.hiY);
-                float rhoX = 0.f, rhoY = 0.f;
-                if (ggaa) {
-                    // GGAA (S5.3-S5.4): kernel s_K Rot(-theta) M^-1 d / (4 sigma_o), x components to the x marginal.
-                    const float gxx = c.cosT * gx.x + c.sinT * gx.y, gxy = -c.sinT * gx.x + c.cosT * gx.y;
-                    const float gyx = c.cosT * gy.x + c.sinT * gy.y, gyy = -c.sinT * gy.x + c.cosT * gy.y;
-                    rhoX = float(kRes) * std::max(std::abs(gxx), std::abs(gyx));
-                    rhoY = float(kRes) * std::max(std::abs(gxy), std::abs(gyy));
-                }
-                // Filtered and unfiltered products are both 0 when one axis reads only zeros at MIP 0 with rho <= 1.
-                if ((outX && !(rhoX > 1.f)) || (outY && !(rhoY > 1.f))) continue;
-                live[nLive++] = {n, ux, uy, rhoX, rhoY, outX, outY};
-                __builtin_prefetch(base + size_t(c.rowX) * kRowFloats + int(ux * float(kRes)));
-                __builtin_prefetch(base + size_t(c.rowY) * kRowFloats + int(uy * float(kRes)));
-            }
+            // Pass 1 (kLanes cells at a time): rotation, the S4.8 test, and the support test (a lookup that reads only
+            // zero texels is 0; with GGAA only where the kernel is under one texel, rho <= 1, so MIP 0 is what is
+            // read); the surviving cells' texels are prefetched. Pass 2 looks them up in cell order: the sums add the
+            // same terms as levelSdf.
+            LiveCells lv;
+            liveCells(base, lev, mh, ggaa, gx, gy, dictionaryZero, lv);
             float sumF = 0.f, sumU = 0.f;
-            for (int n = 0; n < nLive; ++n) {
-                const Lookup& lk = live[n];
-                const GlintCell& c = cells[lk.cell];
-                if (c.rowX == GlintCell::kConverged) {  // S4.6
-                    sumF += c.weight * pB;
-                    if constexpr (kUnfiltered) sumU += c.weight * pB;
+            for (int q = 0; q < lv.count; ++q) {
+                const int n = lv.cell[q], lane = n - levelBegin[lev];
+                if (rowX[n] == kConverged) {  // S4.6
+                    sumF += weight[n] * pB;
+                    if constexpr (kUnfiltered) sumU += weight[n] * pB;
                     continue;
                 }
-                const bool outX = lk.outX, outY = lk.outY;
-                const float ux = lk.ux, uy = lk.uy;
-                const float* rx = base + size_t(c.rowX) * kRowFloats;
-                const float* ry = base + size_t(c.rowY) * kRowFloats;
+                const bool outX = lv.outX[lane] != 0, outY = lv.outY[lane] != 0;
+                const float ux = lv.ux[lane], uy = lv.uy[lane];
+                const float* rx = base + size_t(uint16_t(rowX[n])) * kRowFloats;
+                const float* ry = base + size_t(uint16_t(rowY[n])) * kRowFloats;
                 const float px = outX ? 0.f : sampleLinear(rx, kRes, ux);
                 if (!ggaa) {
                     if (px == 0.f) continue;
                     const float v = shape.detMinv * px * sampleLinear(ry, kRes, uy);  // C21 Eq. 4
-                    sumF += c.weight * v;
-                    if constexpr (kUnfiltered) sumU += c.weight * v;
+                    sumF += weight[n] * v;
+                    if constexpr (kUnfiltered) sumU += weight[n] * v;
                     continue;
                 }
                 // A kernel under one texel (rho <= 1) reads MIP 0 as the unfiltered lookup does: reuse that value.
-                const float pxF = lk.rhoX > 1.f ? textureGradFiltered(rx, ux, lk.rhoX) : px;
+                const float rhoX = lv.rhoX[lane], rhoY = lv.rhoY[lane];
+                const float pxF = rhoX > 1.f ? textureGradFiltered(rx, ux, rhoX) : px;
                 if (pxF == 0.f && px == 0.f) continue;
                 const float py = outY ? 0.f : sampleLinear(ry, kRes, uy);
-                const float pyF = lk.rhoY > 1.f ? textureGradFiltered(ry, uy, lk.rhoY) : py;
-                sumF += c.weight * (shape.detMinv * pxF * pyF);  // C21 Eq. 15
-                if constexpr (kUnfiltered) sumU += c.weight * (shape.detMinv * px * py);
+                const float pyF = rhoY > 1.f ? textureGradFiltered(ry, uy, rhoY) : py;
+                sumF += weight[n] * (shape.detMinv * pxF * pyF);  // C21 Eq. 15
+                if constexpr (kUnfiltered) sumU += weight[n] * (shape.detMinv * px * py);
             }
             levelF[lev] = sumW[lev] > 0.f ? sumF / sumW[lev] : 0.f;
             levelU[lev] = sumW[lev] > 0.f ? sumU / sumW[lev] : 0.f;
@@ -246,31 +235,167 @@ struct GlintCellSet {
     bool sampleSlope(const Dictionary& dict, const GlintShape& shape, Vec2 u, Vec2& slope) const;
 
 private:
+    // The cells of one level that a query must look up (pass 1 of evaluate), in cell order, with the per-lane
+    // lookup coordinates u = |m| / (4 sigma_o), GGAA kernel sizes rho = R max(|g1|, |g2|) and the support flags
+    // (the axis's MIP-0 lookup reads only zeros), indexed by the cell's position in its level.
+    struct LiveCells {
+        int count = 0;
+        int cell[kLevelCapacity];
+        alignas(16) float ux[kLevelCapacity], uy[kLevelCapacity], rhoX[kLevelCapacity], rhoY[kLevelCapacity];
+        alignas(16) int32_t outX[kLevelCapacity], outY[kLevelCapacity];
+    };
+    void liveCells(const float* base, int lev, Vec2 mh, bool ggaa, Vec2 gx, Vec2 gy, bool dictionaryZero,
+                   LiveCells& lv) const;
+    // The texels a live cell's lookups will read: the rows (1.5 MB in all) are read at random, so the lookups are
+    // bound by memory latency; the prefetches are in flight while the earlier cells' lookups run.
+    void prefetchRows(const float* base, int n, float ux, float uy) const {
+        __builtin_prefetch(base + size_t(uint16_t(rowX[n])) * kRowFloats + int(ux * float(kRes)));
+        __builtin_prefetch(base + size_t(uint16_t(rowY[n])) * kRowFloats + int(uy * float(kRes)));
+    }
+
     void addLevel(CellMemo& memo, const uint8_t* support, const GlintParams& p, int l, Vec2 uv, const Footprint& fp) {
         const float lc = p.logDensity / 1.38629436f - float(kLevels - 1) + float(l);  // S4.4
         float sw = 0.f;
+        const int begin = levels == 0 ? 0 : (levelEnd[0] + kLanes - 1) / kLanes * kLanes;
+        int end = begin;
         forEachCell(l, uv, fp.a1, fp.a2, [&](int s, int t, float W) {
             sw += W;
             const CellMemoEntry& r = memo.get(cellSeed(l, s, t));
             if (r.uA > p.relArea) return;  // empty cell: it only normalises
             const int k = dictionaryLod(lc, p.jitter, r.erfZ);
-            GlintCell& c = cells[count++];
-            c.weight = W;
+            const int n = end++;
+            weight[n] = W;
             if (k == kLevels) {
-                c.rowX = c.rowY = GlintCell::kConverged;
+                rowX[n] = rowY[n] = kConverged;
+                cosT[n] = sinT[n] = 0.f;
+                loX[n] = loY[n] = 0, hiX[n] = hiY[n] = int16_t(kRes - 1);
                 return;
             }
-            c.cosT = r.cosT;
-            c.sinT = r.sinT;
-            c.rowX = uint16_t(k * kMarginals + r.i);
-            c.rowY = uint16_t(k * kMarginals + r.j);
-            c.loX = support[2 * c.rowX], c.hiX = support[2 * c.rowX + 1];
-            c.loY = support[2 * c.rowY], c.hiY = support[2 * c.rowY + 1];
+            cosT[n] = r.cosT;
+            sinT[n] = r.sinT;
+            const int rx = k * kMarginals + r.i, ry = k * kMarginals + r.j;
+            rowX[n] = int16_t(rx);
+            rowY[n] = int16_t(ry);
+            loX[n] = support[2 * rx], hiX[n] = support[2 * rx + 1];
+            loY[n] = support[2 * ry], hiY[n] = support[2 * ry + 1];
         });
+        for (int n = end; n % kLanes != 0; ++n) {  // dead padding lanes (see the layout note above)
+            weight[n] = 0.f;
+            cosT[n] = sinT[n] = 0.f;
+            rowX[n] = rowY[n] = 0;
+            loX[n] = loY[n] = int16_t(kRes), hiX[n] = hiY[n] = -1;
+        }
+        count += end - begin;
         sumW[levels] = sw;
-        levelEnd[levels++] = count;
+        levelBegin[levels] = begin;
+        levelEnd[levels++] = end;
     }
 };
+
+// Pass 1 of a query for the cells of level lev. Per cell, exactly the scalar operations of the per-query pipeline
+// (cellSdf): m = Rot(-theta) mh, S4.8, u = |m| / (4 sigma_o), the MIP-0 texel pair of u against the row's support, and
+// the GGAA kernel Rot(-theta) g scaled to texels (S5.2-S5.4); live = converged, or inside S4.8 with neither axis
+// reading only zeros at MIP 0 under a kernel of at most one texel.
+inline void GlintCellSet::liveCells(const float* base, int lev, Vec2 mh, bool ggaa, Vec2 gx, Vec2 gy,
+                                    bool dictionaryZero, LiveCells& lv) const {
+    const int begin = levelBegin[lev], end = levelEnd[lev];
+    const int endPadded = (end + kLanes - 1) / kLanes * kLanes;
+    const float lim = float(4.0 * kSigmaO);
+    lv.count = 0;
+#if defined(__SSE2__)
+    const __m128 vmhx = _mm_set1_ps(mh.x), vmhy = _mm_set1_ps(mh.y);
+    const __m128 vgxx = _mm_set1_ps(gx.x), vgxy = _mm_set1_ps(gx.y), vgyx = _mm_set1_ps(gy.x), vgyy = _mm_set1_ps(gy.y);
+    const __m128 vlim = _mm_set1_ps(lim), vres = _mm_set1_ps(float(kRes)), vhalf = _mm_set1_ps(0.5f);
+    const __m128 vone = _mm_set1_ps(1.f), vzero = _mm_setzero_ps();
+    const __m128 absMask = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
+    const __m128 signMask = _mm_castsi128_ps(_mm_set1_epi32(int(0x80000000u)));
+    const __m128i vlast = _mm_set1_epi32(kRes - 1), vconv = _mm_set1_epi32(kConverged), izero = _mm_setzero_si128();
+    const auto load4 = [](const int16_t* p) {  // 4 int16 -> 4 int32, sign-extended
+        const __m128i v = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(p));
+        return _mm_srai_epi32(_mm_unpacklo_epi16(v, v), 16);
+    };
+    // The MIP-0 texel pair of u (sampleLinear on [0, 1)): i0 = floor(u R - 1/2), reads max(i0, 0) and min(i0 + 1,
+    // R - 1); outside when min(i0 + 1, R - 1) < lo or max(i0, 0) > hi (lookupOutsideSupport). floor as truncation
+    // corrected by one where the truncation rounded up (t < 0), exact for |t| < 2^31.
+    const auto outside = [&](__m128 u, __m128i lo, __m128i hi) {
+        const __m128 t = _mm_sub_ps(_mm_mul_ps(u, vres), vhalf);
+        __m128i i0 = _mm_cvttps_epi32(t);
+        i0 = _mm_add_epi32(i0, _mm_castps_si128(_mm_cmplt_ps(t, _mm_cvtepi32_ps(i0))));
+        __m128i a = _mm_add_epi32(i0, _mm_set1_epi32(1));
+        const __m128i aBig = _mm_cmpgt_epi32(a, vlast);
+        a = _mm_or_si128(_mm_andnot_si128(aBig, a), _mm_and_si128(aBig, vlast));
+        const __m128i b = _mm_and_si128(i0, _mm_cmpgt_epi32(i0, izero));
+        return _mm_or_si128(_mm_cmplt_epi32(a, lo), _mm_cmpgt_epi32(b, hi));
+    };
+    for (int n = begin; n < endPadded; n += kLanes) {
+        const int lane = n - begin;
+        const __m128 conv = _mm_castsi128_ps(_mm_cmpeq_epi32(load4(rowX + n), vconv));
+        __m128 live = conv;
+        if (!dictionaryZero) {
+            const __m128 c = _mm_load_ps(cosT + n), s = _mm_load_ps(sinT + n), ns = _mm_xor_ps(s, signMask);
+            const __m128 mx = _mm_add_ps(_mm_mul_ps(c, vmhx), _mm_mul_ps(s, vmhy));
+            const __m128 my = _mm_add_ps(_mm_mul_ps(ns, vmhx), _mm_mul_ps(c, vmhy));
+            const __m128 ax = _mm_and_ps(mx, absMask), ay = _mm_and_ps(my, absMask);
+            const __m128 cut = _mm_or_ps(_mm_cmpge_ps(ax, vlim), _mm_cmpge_ps(ay, vlim));  // S4.8
+            const __m128 ux = _mm_div_ps(ax, vlim), uy = _mm_div_ps(ay, vlim);
+            const __m128i oX = outside(ux, load4(loX + n), load4(hiX + n));
+            const __m128i oY = outside(uy, load4(loY + n), load4(hiY + n));
+            __m128 rX = vzero, rY = vzero;
+            if (ggaa) {  // S5.2-S5.4: kernel s_K Rot(-theta) M^-1 d / (4 sigma_o), x components to the x marginal
+                const __m128 gxx = _mm_add_ps(_mm_mul_ps(c, vgxx), _mm_mul_ps(s, vgxy));
+                const __m128 gxy = _mm_add_ps(_mm_mul_ps(ns, vgxx), _mm_mul_ps(c, vgxy));
+                const __m128 gyx = _mm_add_ps(_mm_mul_ps(c, vgyx), _mm_mul_ps(s, vgyy));
+                const __m128 gyy = _mm_add_ps(_mm_mul_ps(ns, vgyx), _mm_mul_ps(c, vgyy));
+                // std::max(a, b) = a < b ? b : a = _mm_max_ps(b, a), NaN included
+                rX = _mm_mul_ps(vres, _mm_max_ps(_mm_and_ps(gyx, absMask), _mm_and_ps(gxx, absMask)));
+                rY = _mm_mul_ps(vres, _mm_max_ps(_mm_and_ps(gyy, absMask), _mm_and_ps(gxy, absMask)));
+            }
+            const __m128 deadX = _mm_andnot_ps(_mm_cmpgt_ps(rX, vone), _mm_castsi128_ps(oX));
+            const __m128 deadY = _mm_andnot_ps(_mm_cmpgt_ps(rY, vone), _mm_castsi128_ps(oY));
+            live = _mm_or_ps(conv, _mm_andnot_ps(_mm_or_ps(cut, _mm_or_ps(deadX, deadY)), _mm_castsi128_ps(_mm_set1_epi32(-1))));
+            _mm_store_ps(lv.ux + lane, ux);
+            _mm_store_ps(lv.uy + lane, uy);
+            _mm_store_ps(lv.rhoX + lane, rX);
+            _mm_store_ps(lv.rhoY + lane, rY);
+            _mm_store_si128(reinterpret_cast<__m128i*>(lv.outX + lane), oX);
+            _mm_store_si128(reinterpret_cast<__m128i*>(lv.outY + lane), oY);
+        }
+        int bits = _mm_movemask_ps(live);
+        while (bits != 0) {
+            const int b = __builtin_ctz(unsigned(bits));
+            bits &= bits - 1;
+            lv.cell[lv.count++] = n + b;
+            if (rowX[n + b] != kConverged) prefetchRows(base, n + b, lv.ux[lane + b], lv.uy[lane + b]);
+        }
+    }
+#else
+    for (int n = begin; n < endPadded; ++n) {
+        const int lane = n - begin;
+        if (rowX[n] == kConverged) {
+            lv.cell[lv.count++] = n;
+            continue;
+        }
+        if (dictionaryZero) continue;
+        const float c = cosT[n], s = sinT[n];
+        const float mx = c * mh.x + s * mh.y, my = -s * mh.x + c * mh.y;
+        const float ux = std::abs(mx) / lim, uy = std::abs(my) / lim;
+        const bool outX = lookupOutsideSupport(ux, loX[n], hiX[n]), outY = lookupOutsideSupport(uy, loY[n], hiY[n]);
+        float rX = 0.f, rY = 0.f;
+        if (ggaa) {
+            const float gxx = c * gx.x + s * gx.y, gxy = -s * gx.x + c * gx.y;
+            const float gyx = c * gy.x + s * gy.y, gyy = -s * gy.x + c * gy.y;
+            rX = float(kRes) * std::max(std::abs(gxx), std::abs(gyx));
+            rY = float(kRes) * std::max(std::abs(gxy), std::abs(gyy));
+        }
+        lv.ux[lane] = ux, lv.uy[lane] = uy, lv.rhoX[lane] = rX, lv.rhoY[lane] = rY;
+        lv.outX[lane] = outX, lv.outY[lane] = outY;
+        if (std::abs(mx) >= lim || std::abs(my) >= lim) continue;  // S4.8
+        if ((outX && !(rX > 1.f)) || (outY && !(rY > 1.f))) continue;
+        lv.cell[lv.count++] = n;
+        prefetchRows(base, n, ux, uy);
+    }
+#endif
+}
 
 // Splits a uniform u in [0,1) at 1/2 into a sign and a fresh uniform in [0,1).
 inline float splitSign(float& u) {
@@ -290,29 +415,34 @@ inline bool GlintCellSet::sampleSlope(const Dictionary& dict, const GlintShape& 
         return true;
     }
     float r = u.x * keptWeight;
-    int n = 0, last = -1;
+    int n = -1, last = -1;
     float w = 0.f;
-    for (; n < count; ++n) {  // rounding: the last cell with weight takes the rest
-        if (!(sumW[n < levelEnd[0] ? 0 : 1] > 0.f)) continue;
-        w = normalisedWeight(n);
-        last = n;
-        if (r < w) break;
-        r -= w;
+    for (int lev = 0; lev < levels && n < 0; ++lev) {  // rounding: the last cell with weight takes the rest
+        if (!(sumW[lev] > 0.f)) continue;
+        for (int c = levelBegin[lev]; c < levelEnd[lev]; ++c) {
+            w = sampleWeight[c];
+            last = c;
+            if (r < w) {
+                n = c;
+                break;
+            }
+            r -= w;
+        }
     }
     if (last < 0) return false;
-    if (n == count) n = last;
-    const GlintCell& c = cells[n];
+    if (n < 0) n = last;
     u.x = std::clamp(r / w, 0.f, 0.99999994f);
-    if (c.rowX == GlintCell::kConverged) {
+    if (rowX[n] == kConverged) {
         slope = sampleBeckmannSlope(shape, u);
         return true;
     }
     const float sx = splitSign(u.x), sy = splitSign(u.y);
-    const int kx = c.rowX / kMarginals, ky = c.rowY / kMarginals;
-    const float mx = sx * dict.sampleMarginal(kx, c.rowX - kx * kMarginals, u.x);
-    const float my = sy * dict.sampleMarginal(ky, c.rowY - ky * kMarginals, u.y);
+    const int rx = uint16_t(rowX[n]), ry = uint16_t(rowY[n]);
+    const int kx = rx / kMarginals, ky = ry / kMarginals;
+    const float mx = sx * dict.sampleMarginal(kx, rx - kx * kMarginals, u.x);
+    const float my = sy * dict.sampleMarginal(ky, ry - ky * kMarginals, u.y);
     // mh = Rot(theta) m, h~ = M mh with M = (1/sigma_o) [[sx sqrt(1-rho^2), rho sx], [0, sy]] (C21 Eq. 18).
-    const float ax = c.cosT * mx - c.sinT * my, ay = c.sinT * mx + c.cosT * my;
+    const float ax = cosT[n] * mx - sinT[n] * my, ay = sinT[n] * mx + cosT[n] * my;
     const float so = float(kSigmaO);
     slope = Vec2((shape.sx * shape.sq * ax + shape.rho * shape.sx * ay) / so, shape.sy * ay / so);
     return true;
