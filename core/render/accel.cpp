@@ -75,6 +75,13 @@ bool Accel::intersect(const Ray& ray, Hit& hit) const {
 }
 
 void Accel::intersectStream(const Ray* rays, size_t n, Hit* hits, uint8_t* found) const {
+    if (gRayObserver) gRayObserver->onStream(rays, n);
+    embreeIntersectStream(rays, n, hits, found);
+    for (size_t k = 0; k < n; ++k)
+        if (found[k]) refineHit(rays[k], hits[k]);
+}
+
+void Accel::embreeIntersectStream(const Ray* rays, size_t n, Hit* hits, uint8_t* found) const {
     constexpr size_t kChunk = 64;
     RTCRayHit rh[kChunk];
     RTCIntersectContext ctx;
@@ -84,7 +91,6 @@ void Accel::intersectStream(const Ray* rays, size_t n, Hit* hits, uint8_t* found
         const size_t m = std::min(kChunk, n - begin);
         for (size_t k = 0; k < m; ++k) {
             const Ray& ray = rays[begin + k];
-            if (gRayObserver) gRayObserver->onRay(ray, false);
             RTCRayHit& r = rh[k];
             r.ray.org_x = ray.o.x;
             r.ray.org_y = ray.o.y;
@@ -112,7 +118,6 @@ void Accel::intersectStream(const Ray* rays, size_t n, Hit* hits, uint8_t* found
             hit.prim = r.hit.primID;
             hit.b1 = r.hit.u;
             hit.b2 = r.hit.v;
-            refineHit(rays[begin + k], hit);
         }
     }
 }

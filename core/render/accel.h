@@ -24,6 +24,10 @@ class RayObserver {
 public:
     virtual ~RayObserver() = default;
     virtual void onRay(const Ray& ray, bool shadow) = 0;
+    // The rays of one Accel::intersectStream call (coherent camera rays), in order; by default one onRay each.
+    virtual void onStream(const Ray* rays, size_t n) {
+        for (size_t k = 0; k < n; ++k) onRay(rays[k], false);
+    }
 };
 
 class Accel {
@@ -44,6 +48,8 @@ public:
     // Embree's answer alone: rtcIntersect1 / rtcOccluded1 on this BVH, without the exact recomputation of the hit
     // (refineHit) and unobserved. For bench_embree_limit, the renderer's lower bound (issue 15 item 2).
     bool embreeIntersect(const Ray& ray, Hit& hit) const;
+    // intersectStream's Embree part alone: rtcIntersect1M on up to 64 rays at a time, unrefined and unobserved.
+    void embreeIntersectStream(const Ray* rays, size_t n, Hit* hits, uint8_t* found) const;
     bool embreeOccluded(const Ray& ray) const;
     // Process-wide; set it before a render and clear it after (not while one runs).
     static void setRayObserver(RayObserver* observer);
