@@ -3,7 +3,8 @@
 //
 // Spec: shared/specs/filtered-ggx.md. Everything here is in the local frame of the lobe (z = its normal, x = its
 // tangent t, y = its bitangent b); screen derivatives are "per one-pixel step" along screen x (u) and y (v).
-// Filter math runs in double (spec §3.3 [S]: "compute in double on the CPU").
+// Filter math runs in double (spec §3.3 [S]: "compute in double on the CPU"), except the per-query evaluation of
+// projected_approx with analytic derivatives, which runs in float where its condition allows (FloatProjectedApprox).
 #pragma once
 
 #include "core/render/bsdf.h"
@@ -12,6 +13,12 @@
 
 #include <cmath>
 #include <limits>
+#if defined(__SSE__) || defined(_M_X64)
+#include <xmmintrin.h>
+#define SPECULA_FGGX_FLOAT_PATH 1  // FloatProjectedApprox is written in SSE; elsewhere every query runs in double
+#else
+#define SPECULA_FGGX_FLOAT_PATH 0
+#endif
 
 namespace specula::fggx {
 
@@ -316,6 +323,133 @@ inline bool halfVectorDeltaQuad(const D3& wi, const D2& qSelf, const QuadNeighbo
     return true;
 }
 
+// ---- Float evaluation of projected_approx (issue 37 item 2) -------------------------------------------------------
+
+// f·cos and pdf of the projected_approx lobe (analytic derivatives) in float, written for a short chain of dependent
+// divisions and square roots (error against long double: test FilteredGgxMath.FastEvaluationEqualsLongDoubleReference).
+// - The half vector stays unnormalised, H = wo + wi, l = |H|²: everything below is homogeneous in H, so no square
+//   root of l is on the way, and wo·h = |H|/2 because wo·H = 1 + wo·wi = l/2.
+// - Half-vector derivative (spec §5.1) with the light distance t = |y − p| multiplied through instead of divided:
+//   l t |H| Δh⊥ = P̂ = l (t Δwo⊥ − (P(wi) Δp)⊥ − t H_z Δn⊥) − H⊥ (t H·Δwo − H·P(wi) Δp), from ΔH = Δwo − P(wi) Δp / t,
+//   so 2Σ⊥ = 2σ² (P̂_u P̂_uᵀ + P̂_v P̂_vᵀ) / (l³ t²) and 2σ² fwidth² = 2σ² (|P̂_u| + |P̂_v|)² / (l³ t²) (TK21 Eq. 9,
+//   Listing 3): the one division, of that scale, runs beside the derivatives instead of before them.
+// - With E = H⊥ᵀ adj(Ā) H⊥ + H_z² d (d = max(det Ā, τ)) the bracket of TK21 Eq. 1 is E/(d l), so D = d^{3/2} l² / (π E²)
+//   needs no inverse of Ā; with R(w) = sqrt(w_z² + w⊥ᵀ Ā w⊥), 1 + 2Λ(w) = R/w_z (TK21 A.3), so 1/G2 (Heitz 2014
+//   Eq. 99) = X / (2 o_z i_z) with X = i_z R(o) + o_z R(i), and 1/G1_s(o) = Y / (2 o_z) with Y = o_z + R_s(o). Then
+//     f·cos = F D G2 / (4 o_z) = F d sqrt(d) l² i_z / (2π E² X),   pdf = D_s G1_s / (4 o_z) = norm_s l² / (2 E_s² Y)
+//   (E_s = H⊥ᵀ Ā_s⁻¹ H⊥ + H_z²): one two-lane division, and the four square roots (d, R(o), R(i), R_s(o)) are one
+//   vector instruction.
+// Float loses about eps·(a d + c²)/det Ā relative (cancellation in det and in the quadratic forms of a non-diagonal
+// Ā), so a query whose filtered matrix has a d > kMaxConditionFloat · det Ā goes back to the double form; diagonal
+// matrices (axis-aligned kernel, no covariance: the default) never do.
+#if SPECULA_FGGX_FLOAT_PATH
+struct FloatProjectedApprox {
+    static constexpr float kMaxConditionFloat = 4.f;
+    bool enabled = false;
+    bool fullKernel = false;
+    float a = 0, c = 0, d = 0, tau = 0;  // unfiltered A, clamp τ
+    float twoSigma2 = 0, kappa = 0;
+    float sa = 0, sc = 0, sd = 0;        // sampling matrix Ā_s (for Λ)
+    float ia = 0, ic = 0, id = 0;        // Ā_s⁻¹ (for the NDF bracket)
+    float halfNormS = 0;                 // 1 / (2π sqrt(max(det Ā_s, τ)))
+    // The screen derivatives (k = u, v) as lanes: [Δ_u x, Δ_u y, Δ_v x, Δ_v y] of Δwo, Δp and Δn (tangent-plane
+    // part), and each component of Δwo, Δp repeated over its derivative's two lanes ([Δ_u x, Δ_u x, Δ_v x, Δ_v x], ...).
+    float lanesDwo[4]{}, lanesDp[4]{}, lanesDn[4]{};
+    float lanesDwoX[4]{}, lanesDwoY[4]{}, lanesDwoZ[4]{}, lanesDpX[4]{}, lanesDpY[4]{}, lanesDpZ[4]{};
+
+    void setDerivatives(const D3 dwo[2], const D3 dp[2], const D3 dn[2]) {
+        for (int k = 0; k < 2; ++k)
+            for (int j = 0; j < 2; ++j) {
+                const int lane = 2 * k + j;
+                lanesDwo[lane] = float(dwo[k][j]), lanesDp[lane] = float(dp[k][j]), lanesDn[lane] = float(dn[k][j]);
+                lanesDwoX[lane] = float(dwo[k].x), lanesDwoY[lane] = float(dwo[k].y), lanesDwoZ[lane] = float(dwo[k].z);
+                lanesDpX[lane] = float(dp[k].x), lanesDpY[lane] = float(dp[k].y), lanesDpZ[lane] = float(dp[k].z);
+            }
+    }
+
+    // Returns false (caller evaluates in double) where float is not accurate enough or out of range.
+    bool eval(const Vec3& wo, const Vec3& wi, float lightDistance, float& fScale, float& pdf, float& woh) const {
+        const Vec3 H = wo + wi;
+        const float l = glm::dot(H, H);
+        if (!(l > 1e-6f)) return false;
+        // Directional lights, the environment and BSDF samples (no finite distance) have Δwi = 0: t = 1 and the
+        // P(wi) Δp terms weighted 0; t ≥ 1e12 goes to double (t² must stay in range).
+        const bool pointLight = lightDistance > 0.f && lightDistance < std::numeric_limits<float>::infinity();
+        if (pointLight && !(lightDistance < 1e12f)) return false;
+        const float t = pointLight ? lightDistance : 1.f, pw = pointLight ? 1.f : 0.f;
+        const float scale = twoSigma2 / (l * l * l * t * t);  // 2σ² / (l³ t²)
+        float fa, fc = c, fd;                                  // Ā (TK21 Eq. 9)
+        // Both derivatives at once, lanes [u x, u y, v x, v y]: P̂ = l t P.
+        const __m128 hx = _mm_set1_ps(H.x), hy = _mm_set1_ps(H.y), hz = _mm_set1_ps(H.z), tv = _mm_set1_ps(t);
+        const __m128 dpx = _mm_loadu_ps(lanesDpX), dpy = _mm_loadu_ps(lanesDpY), dpz = _mm_loadu_ps(lanesDpZ);
+        const __m128 wdp = _mm_mul_ps(_mm_set1_ps(pw),  // wi·Δp (0 without a point light)
+                                      _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_set1_ps(wi.x), dpx), _mm_mul_ps(_mm_set1_ps(wi.y), dpy)),
+                                                 _mm_mul_ps(_mm_set1_ps(wi.z), dpz)));
+        const __m128 wodp = _mm_mul_ps(_mm_set1_ps(pw),  // wo·Δp
+                                       _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_set1_ps(wo.x), dpx), _mm_mul_ps(_mm_set1_ps(wo.y), dpy)),
+                                                  _mm_mul_ps(_mm_set1_ps(wo.z), dpz)));
+        const __m128 hdwo = _mm_add_ps(_mm_add_ps(_mm_mul_ps(hx, _mm_loadu_ps(lanesDwoX)), _mm_mul_ps(hy, _mm_loadu_ps(lanesDwoY))),
+                                       _mm_mul_ps(hz, _mm_loadu_ps(lanesDwoZ)));               // H·Δwo
+        // H·P(wi)Δp = H·Δp − (H·wi)(wi·Δp) with H·wi = 1 + wo·wi = l/2
+        const __m128 hproj = _mm_add_ps(wodp, _mm_mul_ps(wdp, _mm_set1_ps(1.f - 0.5f * l)));
+        const __m128 proj = _mm_sub_ps(_mm_mul_ps(_mm_set1_ps(pw), _mm_loadu_ps(lanesDp)),   // (P(wi)Δp)⊥
+                                       _mm_mul_ps(_mm_setr_ps(wi.x, wi.y, wi.x, wi.y), wdp));
+        const __m128 tHdH = _mm_sub_ps(_mm_mul_ps(tv, hdwo), hproj);  // t H·ΔH
+        const __m128 P = _mm_sub_ps(
+            _mm_mul_ps(_mm_set1_ps(l), _mm_sub_ps(_mm_mul_ps(tv, _mm_sub_ps(_mm_loadu_ps(lanesDwo), _mm_mul_ps(hz, _mm_loadu_ps(lanesDn)))), proj)),
+            _mm_mul_ps(_mm_setr_ps(H.x, H.y, H.x, H.y), tHdH));
+        if (fullKernel) {
+            const __m128 P2 = _mm_mul_ps(P, P);
+            const __m128 diag = _mm_add_ps(P2, _mm_movehl_ps(P2, P2));  // [Σ P_x², Σ P_y², ...]
+            const __m128 cross = _mm_mul_ps(P, _mm_shuffle_ps(P, P, _MM_SHUFFLE(2, 3, 0, 1)));
+            fa = a + scale * _mm_cvtss_f32(diag);
+            fd = d + scale * _mm_cvtss_f32(_mm_shuffle_ps(diag, diag, _MM_SHUFFLE(1, 1, 1, 1)));
+            fc = c + scale * (_mm_cvtss_f32(cross) + _mm_cvtss_f32(_mm_movehl_ps(cross, cross)));
+        } else {  // Listing 3: min(2σ² fwidth², κ) per axis, saturated
+            const __m128 absP = _mm_andnot_ps(_mm_set1_ps(-0.f), P);
+            const __m128 w = _mm_add_ps(absP, _mm_movehl_ps(absP, absP));  // [fwidth x, fwidth y, ...] · l t
+            const __m128 f = _mm_min_ps(_mm_add_ps(_mm_setr_ps(a, d, a, d), _mm_min_ps(_mm_mul_ps(_mm_set1_ps(scale), _mm_mul_ps(w, w)),
+                                                                                      _mm_set1_ps(kappa))),
+                                        _mm_set1_ps(1.f));
+            fa = _mm_cvtss_f32(f);
+            fd = _mm_cvtss_f32(_mm_shuffle_ps(f, f, _MM_SHUFFLE(1, 1, 1, 1)));
+        }
+        const float ad = fa * fd, det = ad - fc * fc;
+        if (ad > kMaxConditionFloat * det) return false;
+        const float dc = std::max(det, tau);
+        // Lanes [d, R(o)², R(i)², R_s(o)²] → one square root.
+        const __m128 wx = _mm_setr_ps(0.f, wo.x, wi.x, wo.x), wy = _mm_setr_ps(0.f, wo.y, wi.y, wo.y);
+        const __m128 wz = _mm_setr_ps(0.f, wo.z, wi.z, wo.z);
+        const __m128 quad = _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_setr_ps(0.f, fa, fa, sa), _mm_mul_ps(wx, wx)),
+                                                  _mm_mul_ps(_mm_setr_ps(0.f, 2.f * fc, 2.f * fc, 2.f * sc), _mm_mul_ps(wx, wy))),
+                                       _mm_mul_ps(_mm_setr_ps(0.f, fd, fd, sd), _mm_mul_ps(wy, wy)));
+        const __m128 rad = _mm_move_ss(_mm_add_ps(_mm_max_ps(quad, _mm_setzero_ps()), _mm_mul_ps(wz, wz)), _mm_set_ss(dc));
+        const __m128 r = _mm_sqrt_ps(rad);
+        // [i_z R(o), o_z R(i), R_s(o)] → X, Y
+        const __m128 zr = _mm_mul_ps(r, _mm_setr_ps(0.f, wi.z, wo.z, 1.f));
+        const float X = _mm_cvtss_f32(_mm_shuffle_ps(zr, zr, _MM_SHUFFLE(1, 1, 1, 1))) +
+                        _mm_cvtss_f32(_mm_movehl_ps(zr, zr));
+        const float Y = wo.z + _mm_cvtss_f32(_mm_shuffle_ps(zr, zr, _MM_SHUFFLE(3, 3, 3, 3)));
+        // Lanes [E, E_s]
+        const float Hz2 = H.z * H.z, l2 = l * l;
+        const __m128 Ev = _mm_add_ps(
+            _mm_add_ps(_mm_mul_ps(_mm_setr_ps(fd, ia, 0.f, 0.f), _mm_set1_ps(H.x * H.x)),
+                       _mm_mul_ps(_mm_setr_ps(-2.f * fc, 2.f * ic, 0.f, 0.f), _mm_set1_ps(H.x * H.y))),
+            _mm_add_ps(_mm_mul_ps(_mm_setr_ps(fa, id, 0.f, 0.f), _mm_set1_ps(H.y * H.y)), _mm_setr_ps(Hz2 * dc, Hz2, 1.f, 1.f)));
+        const __m128 den = _mm_mul_ps(_mm_mul_ps(Ev, Ev), _mm_setr_ps(X, Y, 1.f, 1.f));  // [E² X, E_s² Y]
+        const __m128 inRange = _mm_and_ps(_mm_cmpgt_ps(den, _mm_set1_ps(1e-30f)), _mm_cmplt_ps(den, _mm_set1_ps(1e30f)));
+        if ((_mm_movemask_ps(inRange) & 3) != 3) return false;
+        const float numF = dc * _mm_cvtss_f32(r) * l2 * wi.z * float(1.0 / (2.0 * kPiD));
+        if (!(numF > 1e-30f)) return false;  // d^{3/2} of a τ near float's range, at a grazing wi
+        const __m128 res = _mm_div_ps(_mm_setr_ps(numF, halfNormS * l2, 1.f, 1.f), den);
+        fScale = _mm_cvtss_f32(res);
+        pdf = _mm_cvtss_f32(_mm_shuffle_ps(res, res, _MM_SHUFFLE(1, 1, 1, 1)));
+        woh = 0.5f * std::sqrt(l);
+        return true;
+    }
+};
+#endif
+
 // ---- The lobe ------------------------------------------------------------------------------------------------------
 
 // A = diag(α_x², α_y²) + 2Σ with Σ made positive semi-definite (|Σ_xy| ≤ sqrt(Σ_xx Σ_yy)); α clamped to
@@ -360,6 +494,7 @@ public:
         }
         sampling_ = PreparedGgx(fixed_, tau_);
         samplingL_ = cholesky(fixed_);
+        prepareFloat();
     }
 
     LobeKind kind() const override { return LobeKind::Specular; }
@@ -378,8 +513,22 @@ public:
     // (Heitz 2018 Eq. 1: the wo·h of the VNDF cancels the reflection Jacobian's). Written for few divisions (they
     // are most of the cost): both values share one reciprocal, and the matrices that do not depend on wi are prepared
     // once (test FilteredGgxMath.FastEvaluationEqualsLongDoubleReference checks it against Eq. 1 and Eq. 99 directly).
+    // projected_approx with analytic derivatives takes the float form FloatProjectedApprox first (its filter costs
+    // what the rest of the evaluation costs; bench_filtered_ggx) and comes back here where that form declines.
     LobeValue evalPdf(const LobeQuery& q) const override {
         if (q.wo.z <= 0.f || q.wi.z <= 0.f) return {};
+#if SPECULA_FGGX_FLOAT_PATH
+        if (float_.enabled) {
+            float fScale, pdf, woh;
+            if (float_.eval(q.wo, q.wi, q.lightDistance, fScale, pdf, woh)) {
+                LobeValue r;
+                r.f = tint_ * fresnel_.eval(woh) * fScale;
+                r.pdf = pdf;
+                return r;
+            }
+        }
+#endif
+        // The double form (every variant; the fallback of the float one).
         const D3 wo(q.wo), wi(q.wi);
         const D3 H = wo + wi;
         const double len = glm::length(H);
@@ -448,10 +597,42 @@ public:
         Sym2 s = filtered(wo, wi, 0.0, false);
         sampling_ = PreparedGgx(s, tau_);
         samplingL_ = cholesky(s);
+        prepareFloat();
         invalidatePolygonLtc();
+    }
+    // Whether evalPdf takes the float form (FloatProjectedApprox) for queries whose filtered matrix allows it.
+    bool usesFloat() const {
+#if SPECULA_FGGX_FLOAT_PATH
+        return float_.enabled;
+#else
+        return false;
+#endif
     }
 
 private:
+    // Float copies for FloatProjectedApprox: projected_approx with analytic derivatives only (quad neighbours and the
+    // eigenvalue clamp of the full kernel stay in double), unfiltered and sampling matrices whose condition float can
+    // carry, and τ ≥ 1e-17 (α ≥ 1e-4 on both axes, the clamp of roughnessMatrix, gives τ ≥ 1e-16), so that d^{3/2}
+    // stays a normal float.
+    void prepareFloat() {
+#if SPECULA_FGGX_FLOAT_PATH
+        FloatProjectedApprox& F = float_;
+        const FilterParams& p = s_.params;
+        const Sym2& S = sampling_.A;
+        F.enabled = halfVector_ && p.filter == Filter::ProjectedApprox && s_.diff.valid && !s_.quad &&
+                    !(p.kernel == Kernel::Full && p.clampFullKernel) && tau_ >= 1e-17 && S.det() > 0.0 &&
+                    S.a * S.d <= double(FloatProjectedApprox::kMaxConditionFloat) * S.det() &&
+                    s_.A.a * s_.A.d <= double(FloatProjectedApprox::kMaxConditionFloat) * s_.A.det();
+        if (!F.enabled) return;
+        F.fullKernel = p.kernel == Kernel::Full;
+        F.a = float(s_.A.a), F.c = float(s_.A.c), F.d = float(s_.A.d), F.tau = float(tau_);
+        F.twoSigma2 = float(2.0 * p.sigma2), F.kappa = float(p.kappa);
+        F.setDerivatives(s_.diff.dwo, s_.diff.dp, s_.diff.dn);
+        F.sa = float(S.a), F.sc = float(S.c), F.sd = float(S.d);
+        F.ia = float(sampling_.inv.a), F.ic = float(sampling_.inv.c), F.id = float(sampling_.inv.d);
+        F.halfNormS = float(0.5 * sampling_.norm);
+#endif
+    }
     // The half-vector filter for h = (wo + wi)/|wo + wi| given with 1/|wo + wi|.
     Sym2 filteredAt(const D3& h, double invLen, const D3& wi, double invLightDist, bool useQuad) const {
         const bool slope = s_.params.filter == Filter::Slope;
@@ -475,6 +656,9 @@ private:
     Sym2 fixed_;
     PreparedGgx sampling_;  // Ā_s, prepared (equal to fixed_ unless the filter depends on the half vector)
     Chol2 samplingL_;
+#if SPECULA_FGGX_FLOAT_PATH
+    FloatProjectedApprox float_;
+#endif
 };
 
 }  // namespace specula::fggx
