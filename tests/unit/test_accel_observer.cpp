@@ -65,3 +65,52 @@ TEST(AccelObserver, SeesEveryRayAndChangesNoPixel) {
     for (size_t i = 0; i < c.shadows.size(); i += 7)
         EXPECT_EQ(accel.occluded(c.shadows[i]), accel.embreeOccluded(c.shadows[i])) << "shadow ray " << i;
 }
+
+// Issue 37: the renderer's camera rays go through Accel::intersectStream (rtcIntersect1M). For every ray it must find
+// the triangle Accel::intersect finds, with the same bits of t and barycentrics (refineHit recomputes them from the
+// triangle), and the observer must see each ray once, in order, as one stream.
+TEST(AccelObserver, StreamsFindWhatSingleRaysFindToTheBit) {
+    class Streams final : public RayObserver {
+    public:
+        void onRay(const Ray&, bool) override { ++single; }
+        void onStream(const Ray* rays, size_t n) override { streamed.insert(streamed.end(), rays, rays + n); }
+        size_t single = 0;
+        std::vector<Ray> streamed;
+    };
+    SceneOverrides ov;
+    ov.spp = 1;
+    ov.width = ov.height = 48;
+    const Scene scene = loadScene(test::sourcePath("examples/demo.json"), ov);
+    Accel accel(scene);
+    // Every non-shadow ray of a demo render: camera rays (coherent) and bounce rays (incoherent), as one long stream.
+    std::vector<Ray> rays;
+    Collect c;
+    Accel::setRayObserver(&c);
+    renderScene(scene);
+    Accel::setRayObserver(nullptr);
+    rays.insert(rays.end(), c.rays.begin(), c.rays.end());
+    ASSERT_GT(rays.size(), size_t(48 * 48));
+    std::vector<Hit> hits(rays.size());
+    std::vector<uint8_t> found(rays.size());
+    Streams s;
+    Accel::setRayObserver(&s);
+    accel.intersectStream(rays.data(), rays.size(), hits.data(), found.data());
+    Accel::setRayObserver(nullptr);
+    EXPECT_EQ(s.single, 0u);
+    ASSERT_EQ(s.streamed.size(), rays.size());
+    EXPECT_EQ(0, std::memcmp(s.streamed.data(), rays.data(), rays.size() * sizeof(Ray)));
+    size_t hitCount = 0;
+    for (size_t i = 0; i < rays.size(); ++i) {
+        Hit h;
+        const bool a = accel.intersect(rays[i], h);
+        ASSERT_EQ(a, bool(found[i])) << "ray " << i;
+        if (!a) continue;
+        ++hitCount;
+        EXPECT_EQ(h.shape, hits[i].shape) << "ray " << i;
+        EXPECT_EQ(h.prim, hits[i].prim) << "ray " << i;
+        EXPECT_EQ(0, std::memcmp(&h.t, &hits[i].t, sizeof(float))) << "ray " << i;
+        EXPECT_EQ(0, std::memcmp(&h.b1, &hits[i].b1, sizeof(float))) << "ray " << i;
+        EXPECT_EQ(0, std::memcmp(&h.b2, &hits[i].b2, sizeof(float))) << "ray " << i;
+    }
+    EXPECT_GT(hitCount, rays.size() / 4);
+}
