@@ -7,8 +7,10 @@
 #include "nodes/bsdf/glint/glint_lookup.h"
 #include "nodes/bsdf/glint/glint_params.h"
 
+#include <algorithm>
 #include <atomic>
 #include <cstdint>
+#include <cstring>
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -177,41 +179,38 @@ struct GlintCellSet {
         const bool dictionaryZero = !(glm::dot(mh, mh) < 2.00002f * lim * lim);
         const float* base = dict.data().data();
         float levelF[2] = {0.f, 0.f}, levelU[2] = {0.f, 0.f};
+        // Pass 1 (kLanes cells at a time), both levels before any lookup so the prefetches have time to land:
+        // rotation, the S4.8 test, and the support test (a lookup that reads only zero texels is 0; with GGAA only
+        // where the kernel is under one texel, rho <= 1, so MIP 0 is what is read); the surviving cells' texels are
+        // prefetched. Pass 2 looks them up in cell order: the sums add the same terms as levelSdf.
+        LiveCells live[2];
+        for (int lev = 0; lev < levels; ++lev) liveCells(base, lev, mh, ggaa, gx, gy, dictionaryZero, live[lev]);
         for (int lev = 0; lev < levels; ++lev) {
-            // Pass 1 (kLanes cells at a time): rotation, the S4.8 test, and the support test (a lookup that reads only
-            // zero texels is 0; with GGAA only where the kernel is under one texel, rho <= 1, so MIP 0 is what is
-            // read); the surviving cells' texels are prefetched. Pass 2 looks them up in cell order: the sums add the
-            // same terms as levelSdf.
-            LiveCells lv;
-            liveCells(base, lev, mh, ggaa, gx, gy, dictionaryZero, lv);
+            LiveCells& lv = live[lev];
+            // Pass 2: the MIP-0 lookups of every live cell without branches (an axis that reads only zeros is 0; so is
+            // a converged cell's, whose term is W P_B), then the GGAA-filtered lookups of the cells whose kernel
+            // exceeds a texel (rho > 1), then the sums in cell order. A term the per-query pipeline skips (a zero
+            // lookup) is an exact +0 here, which leaves the sums unchanged.
+            lookupMip0(base, lv);
+            for (int f = 0; f < lv.nFilteredX; ++f) {  // one list per axis: no branch on rho here
+                const int q = lv.filteredX[f];
+                lv.pxF[q] = textureGradFiltered(base + size_t(uint16_t(rowX[lv.cell[q]])) * kRowFloats, lv.ux[q], lv.rhoX[q]);
+            }
+            for (int f = 0; f < lv.nFilteredY; ++f) {
+                const int q = lv.filteredY[f];
+                lv.pyF[q] = textureGradFiltered(base + size_t(uint16_t(rowY[lv.cell[q]])) * kRowFloats, lv.uy[q], lv.rhoY[q]);
+            }
             float sumF = 0.f, sumU = 0.f;
             for (int q = 0; q < lv.count; ++q) {
-                const int n = lv.cell[q], lane = n - levelBegin[lev];
+                const int n = lv.cell[q];
                 if (rowX[n] == kConverged) {  // S4.6
                     sumF += weight[n] * pB;
                     if constexpr (kUnfiltered) sumU += weight[n] * pB;
                     continue;
                 }
-                const bool outX = lv.outX[lane] != 0, outY = lv.outY[lane] != 0;
-                const float ux = lv.ux[lane], uy = lv.uy[lane];
-                const float* rx = base + size_t(uint16_t(rowX[n])) * kRowFloats;
-                const float* ry = base + size_t(uint16_t(rowY[n])) * kRowFloats;
-                const float px = outX ? 0.f : sampleLinear(rx, kRes, ux);
-                if (!ggaa) {
-                    if (px == 0.f) continue;
-                    const float v = shape.detMinv * px * sampleLinear(ry, kRes, uy);  // C21 Eq. 4
-                    sumF += weight[n] * v;
-                    if constexpr (kUnfiltered) sumU += weight[n] * v;
-                    continue;
-                }
-                // A kernel under one texel (rho <= 1) reads MIP 0 as the unfiltered lookup does: reuse that value.
-                const float rhoX = lv.rhoX[lane], rhoY = lv.rhoY[lane];
-                const float pxF = rhoX > 1.f ? textureGradFiltered(rx, ux, rhoX) : px;
-                if (pxF == 0.f && px == 0.f) continue;
-                const float py = outY ? 0.f : sampleLinear(ry, kRes, uy);
-                const float pyF = rhoY > 1.f ? textureGradFiltered(ry, uy, rhoY) : py;
-                sumF += weight[n] * (shape.detMinv * pxF * pyF);  // C21 Eq. 15
-                if constexpr (kUnfiltered) sumU += weight[n] * (shape.detMinv * px * py);
+                // C21 Eq. 4 (GGAA off: pxF = px, pyF = py) and Eq. 15
+                sumF += weight[n] * (shape.detMinv * lv.pxF[q] * lv.pyF[q]);
+                if constexpr (kUnfiltered) sumU += weight[n] * (shape.detMinv * lv.px[q] * lv.py[q]);
             }
             levelF[lev] = sumW[lev] > 0.f ? sumF / sumW[lev] : 0.f;
             levelU[lev] = sumW[lev] > 0.f ? sumU / sumW[lev] : 0.f;
@@ -235,22 +234,38 @@ struct GlintCellSet {
     bool sampleSlope(const Dictionary& dict, const GlintShape& shape, Vec2 u, Vec2& slope) const;
 
 private:
-    // The cells of one level that a query must look up (pass 1 of evaluate), in cell order, with the per-lane
-    // lookup coordinates u = |m| / (4 sigma_o), GGAA kernel sizes rho = R max(|g1|, |g2|) and the support flags
-    // (the axis's MIP-0 lookup reads only zeros), indexed by the cell's position in its level.
+    // The cells of one level that a query must look up (pass 1 of evaluate), in cell order (index q), with their
+    // lookup coordinates u = |m| / (4 sigma_o), GGAA kernel sizes rho = R max(|g1|, |g2|), whether the axis's MIP-0
+    // lookup reads only zeros, the cells with a kernel over one texel per axis (filteredX, filteredY), and pass 2's
+    // lookups: MIP 0 (px, py)
+    // and GGAA-filtered (pxF, pyF; equal to px, py where rho <= 1). Arrays padded to whole lanes.
     struct LiveCells {
-        int count = 0;
-        int cell[kLevelCapacity];
-        alignas(16) float ux[kLevelCapacity], uy[kLevelCapacity], rhoX[kLevelCapacity], rhoY[kLevelCapacity];
-        alignas(16) int32_t outX[kLevelCapacity], outY[kLevelCapacity];
+        static constexpr int kCapacity = kLevelCapacity + kLanes;
+        int count = 0, nFilteredX = 0, nFilteredY = 0;
+        int cell[kCapacity], filteredX[kCapacity], filteredY[kCapacity];
+        alignas(16) float ux[kCapacity], uy[kCapacity], rhoX[kCapacity], rhoY[kCapacity];
+        alignas(16) int32_t outX[kCapacity], outY[kCapacity];
+        alignas(16) float px[kCapacity], py[kCapacity], pxF[kCapacity], pyF[kCapacity];
     };
+    void lookupMip0(const float* base, LiveCells& lv) const;
     void liveCells(const float* base, int lev, Vec2 mh, bool ggaa, Vec2 gx, Vec2 gy, bool dictionaryZero,
                    LiveCells& lv) const;
     // The texels a live cell's lookups will read: the rows (1.5 MB in all) are read at random, so the lookups are
     // bound by memory latency; the prefetches are in flight while the earlier cells' lookups run.
-    void prefetchRows(const float* base, int n, float ux, float uy) const {
-        __builtin_prefetch(base + size_t(uint16_t(rowX[n])) * kRowFloats + int(ux * float(kRes)));
-        __builtin_prefetch(base + size_t(uint16_t(rowY[n])) * kRowFloats + int(uy * float(kRes)));
+    // With a GGAA kernel over one texel (rho > 1) also the two MIPs textureGradFiltered blends, floor(log2 rho) and the
+    // next, taken from rho's exponent (a prefetch needs no exact MIP).
+    void prefetchRows(const float* base, int n, float ux, float uy, float rhoX, float rhoY) const {
+        prefetchLookup(base + size_t(uint16_t(rowX[n])) * kRowFloats, ux, rhoX);
+        prefetchLookup(base + size_t(uint16_t(rowY[n])) * kRowFloats, uy, rhoY);
+    }
+    static void prefetchLookup(const float* row, float u, float rho) {
+        __builtin_prefetch(row + int(u * float(kRes)));
+        if (!(rho > 1.f)) return;
+        uint32_t bits;
+        std::memcpy(&bits, &rho, sizeof bits);
+        const int m = std::clamp(int(bits >> 23) - 127, 0, kMips - 2);
+        __builtin_prefetch(row + mipOffset(m) + int(u * float(mipRes(m))));
+        __builtin_prefetch(row + mipOffset(m + 1) + int(u * float(mipRes(m + 1))));
     }
 
     void addLevel(CellMemo& memo, const uint8_t* support, const GlintParams& p, int l, Vec2 uv, const Footprint& fp) {
@@ -301,7 +316,7 @@ inline void GlintCellSet::liveCells(const float* base, int lev, Vec2 mh, bool gg
     const int begin = levelBegin[lev], end = levelEnd[lev];
     const int endPadded = (end + kLanes - 1) / kLanes * kLanes;
     const float lim = float(4.0 * kSigmaO);
-    lv.count = 0;
+    lv.count = lv.nFilteredX = lv.nFilteredY = 0;
 #if defined(__SSE2__)
     const __m128 vmhx = _mm_set1_ps(mh.x), vmhy = _mm_set1_ps(mh.y);
     const __m128 vgxx = _mm_set1_ps(gx.x), vgxy = _mm_set1_ps(gx.y), vgyx = _mm_set1_ps(gy.x), vgyy = _mm_set1_ps(gy.y);
@@ -327,8 +342,11 @@ inline void GlintCellSet::liveCells(const float* base, int lev, Vec2 mh, bool gg
         const __m128i b = _mm_and_si128(i0, _mm_cmpgt_epi32(i0, izero));
         return _mm_or_si128(_mm_cmplt_epi32(a, lo), _mm_cmpgt_epi32(b, hi));
     };
+    alignas(16) float tux[kLanes] = {0.f, 0.f, 0.f, 0.f}, tuy[kLanes] = {0.f, 0.f, 0.f, 0.f};
+    alignas(16) float trX[kLanes] = {0.f, 0.f, 0.f, 0.f}, trY[kLanes] = {0.f, 0.f, 0.f, 0.f};
+    alignas(16) int32_t toX[kLanes] = {0, 0, 0, 0}, toY[kLanes] = {0, 0, 0, 0};
+    int filteredBitsX = 0, filteredBitsY = 0;
     for (int n = begin; n < endPadded; n += kLanes) {
-        const int lane = n - begin;
         const __m128 conv = _mm_castsi128_ps(_mm_cmpeq_epi32(load4(rowX + n), vconv));
         __m128 live = conv;
         if (!dictionaryZero) {
@@ -353,26 +371,37 @@ inline void GlintCellSet::liveCells(const float* base, int lev, Vec2 mh, bool gg
             const __m128 deadX = _mm_andnot_ps(_mm_cmpgt_ps(rX, vone), _mm_castsi128_ps(oX));
             const __m128 deadY = _mm_andnot_ps(_mm_cmpgt_ps(rY, vone), _mm_castsi128_ps(oY));
             live = _mm_or_ps(conv, _mm_andnot_ps(_mm_or_ps(cut, _mm_or_ps(deadX, deadY)), _mm_castsi128_ps(_mm_set1_epi32(-1))));
-            _mm_store_ps(lv.ux + lane, ux);
-            _mm_store_ps(lv.uy + lane, uy);
-            _mm_store_ps(lv.rhoX + lane, rX);
-            _mm_store_ps(lv.rhoY + lane, rY);
-            _mm_store_si128(reinterpret_cast<__m128i*>(lv.outX + lane), oX);
-            _mm_store_si128(reinterpret_cast<__m128i*>(lv.outY + lane), oY);
+            _mm_store_ps(tux, ux);
+            _mm_store_ps(tuy, uy);
+            _mm_store_ps(trX, rX);
+            _mm_store_ps(trY, rY);
+            _mm_store_si128(reinterpret_cast<__m128i*>(toX), oX);
+            _mm_store_si128(reinterpret_cast<__m128i*>(toY), oY);
+            filteredBitsX = _mm_movemask_ps(_mm_cmpgt_ps(rX, vone));
+            filteredBitsY = _mm_movemask_ps(_mm_cmpgt_ps(rY, vone));
         }
         int bits = _mm_movemask_ps(live);
         while (bits != 0) {
             const int b = __builtin_ctz(unsigned(bits));
             bits &= bits - 1;
-            lv.cell[lv.count++] = n + b;
-            if (rowX[n + b] != kConverged) prefetchRows(base, n + b, lv.ux[lane + b], lv.uy[lane + b]);
+            const int q = lv.count++;
+            lv.cell[q] = n + b;
+            lv.ux[q] = tux[b], lv.uy[q] = tuy[b], lv.rhoX[q] = trX[b], lv.rhoY[q] = trY[b];
+            lv.outX[q] = toX[b], lv.outY[q] = toY[b];
+            lv.filteredX[lv.nFilteredX] = q;
+            lv.nFilteredX += (filteredBitsX >> b) & 1;
+            lv.filteredY[lv.nFilteredY] = q;
+            lv.nFilteredY += (filteredBitsY >> b) & 1;
+            if (rowX[n + b] != kConverged) prefetchRows(base, n + b, tux[b], tuy[b], trX[b], trY[b]);
         }
     }
 #else
     for (int n = begin; n < endPadded; ++n) {
-        const int lane = n - begin;
         if (rowX[n] == kConverged) {
-            lv.cell[lv.count++] = n;
+            const int q = lv.count++;
+            lv.cell[q] = n;
+            lv.ux[q] = lv.uy[q] = lv.rhoX[q] = lv.rhoY[q] = 0.f;
+            lv.outX[q] = lv.outY[q] = 0;
             continue;
         }
         if (dictionaryZero) continue;
@@ -387,12 +416,79 @@ inline void GlintCellSet::liveCells(const float* base, int lev, Vec2 mh, bool gg
             rX = float(kRes) * std::max(std::abs(gxx), std::abs(gyx));
             rY = float(kRes) * std::max(std::abs(gxy), std::abs(gyy));
         }
-        lv.ux[lane] = ux, lv.uy[lane] = uy, lv.rhoX[lane] = rX, lv.rhoY[lane] = rY;
-        lv.outX[lane] = outX, lv.outY[lane] = outY;
         if (std::abs(mx) >= lim || std::abs(my) >= lim) continue;  // S4.8
         if ((outX && !(rX > 1.f)) || (outY && !(rY > 1.f))) continue;
-        lv.cell[lv.count++] = n;
-        prefetchRows(base, n, ux, uy);
+        const int q = lv.count++;
+        lv.cell[q] = n;
+        lv.ux[q] = ux, lv.uy[q] = uy, lv.rhoX[q] = rX, lv.rhoY[q] = rY;
+        lv.outX[q] = outX ? -1 : 0, lv.outY[q] = outY ? -1 : 0;
+        if (rX > 1.f) lv.filteredX[lv.nFilteredX++] = q;
+        if (rY > 1.f) lv.filteredY[lv.nFilteredY++] = q;
+        prefetchRows(base, n, ux, uy, rX, rY);
+    }
+#endif
+}
+
+// Pass 2's MIP-0 lookups (sampleLinear on [0, 1), the same float operations) of every live cell, kLanes at a time:
+// the texel indices and weights in SSE2, the texels gathered by scalar loads with no branch on the data. An axis that
+// reads only zeros (out) and a converged cell read texel 0 of the table instead (cached) and are masked to +0.
+inline void GlintCellSet::lookupMip0(const float* base, LiveCells& lv) const {
+    const int padded = (lv.count + kLanes - 1) / kLanes * kLanes;
+    for (int q = lv.count; q < padded; ++q) {  // dead lanes
+        lv.cell[q] = lv.cell[0];
+        lv.ux[q] = lv.uy[q] = 0.f;
+        lv.outX[q] = lv.outY[q] = -1;
+    }
+#if defined(__SSE2__)
+    const __m128 vres = _mm_set1_ps(float(kRes)), vhalf = _mm_set1_ps(0.5f), vone = _mm_set1_ps(1.f);
+    const __m128i vlast = _mm_set1_epi32(kRes - 1), izero = _mm_setzero_si128(), ione = _mm_set1_epi32(1);
+    // The lanes' inputs were just written one float at a time (pass 1's compaction), so they are gathered with
+    // scalar loads (_mm_setr): a 16-byte load of four recent 4-byte stores would stall on store forwarding.
+    const auto lookup = [&](const float* u, const int32_t* out, const __m128i row, const __m128i conv, float* result,
+                            float* filteredResult) {
+        const __m128 t = _mm_sub_ps(_mm_mul_ps(_mm_setr_ps(u[0], u[1], u[2], u[3]), vres), vhalf);
+        __m128i i0 = _mm_cvttps_epi32(t);  // floor(t): truncation corrected where it rounded up
+        i0 = _mm_add_epi32(i0, _mm_castps_si128(_mm_cmplt_ps(t, _mm_cvtepi32_ps(i0))));
+        const __m128 f = _mm_sub_ps(t, _mm_cvtepi32_ps(i0));
+        const __m128i a = _mm_and_si128(i0, _mm_cmpgt_epi32(i0, izero));  // max(i0, 0)
+        __m128i b = _mm_add_epi32(i0, ione);                               // min(i0 + 1, R - 1)
+        const __m128i bBig = _mm_cmpgt_epi32(b, vlast);
+        b = _mm_or_si128(_mm_andnot_si128(bBig, b), _mm_and_si128(bBig, vlast));
+        const __m128i skip = _mm_or_si128(_mm_setr_epi32(out[0], out[1], out[2], out[3]), conv);
+        alignas(16) int32_t ia[kLanes], ib[kLanes];
+        _mm_store_si128(reinterpret_cast<__m128i*>(ia), _mm_andnot_si128(skip, _mm_add_epi32(row, a)));
+        _mm_store_si128(reinterpret_cast<__m128i*>(ib), _mm_andnot_si128(skip, _mm_add_epi32(row, b)));
+        const __m128 ta = _mm_setr_ps(base[ia[0]], base[ia[1]], base[ia[2]], base[ia[3]]);
+        const __m128 tb = _mm_setr_ps(base[ib[0]], base[ib[1]], base[ib[2]], base[ib[3]]);
+        // (1 - f) tex[a] + f tex[b], as sampleLinear
+        const __m128 v = _mm_add_ps(_mm_mul_ps(_mm_sub_ps(vone, f), ta), _mm_mul_ps(f, tb));
+        const __m128 masked = _mm_andnot_ps(_mm_castsi128_ps(skip), v);
+        _mm_store_ps(result, masked);
+        _mm_store_ps(filteredResult, masked);
+    };
+    for (int q = 0; q < padded; q += kLanes) {
+        const int* n = lv.cell + q;
+        const __m128i rx = _mm_setr_epi32(rowX[n[0]], rowX[n[1]], rowX[n[2]], rowX[n[3]]);
+        const __m128i ry = _mm_setr_epi32(rowY[n[0]], rowY[n[1]], rowY[n[2]], rowY[n[3]]);
+        const __m128i conv = _mm_cmpeq_epi32(rx, _mm_set1_epi32(kConverged));
+        // k N + i < 2^15: the int16 rows are non-negative except kConverged, which the lookups mask
+        const __m128i vstride = _mm_set1_epi32(kRowFloats);
+        const auto mul = [](__m128i a, __m128i b) {  // 32-bit products of small non-negative values (SSE2)
+            const __m128i even = _mm_mul_epu32(a, b), odd = _mm_mul_epu32(_mm_srli_epi64(a, 32), _mm_srli_epi64(b, 32));
+            return _mm_unpacklo_epi32(_mm_shuffle_epi32(even, _MM_SHUFFLE(0, 0, 2, 0)),
+                                      _mm_shuffle_epi32(odd, _MM_SHUFFLE(0, 0, 2, 0)));
+        };
+        lookup(lv.ux + q, lv.outX + q, mul(_mm_andnot_si128(conv, rx), vstride), conv, lv.px + q, lv.pxF + q);
+        lookup(lv.uy + q, lv.outY + q, mul(_mm_andnot_si128(conv, ry), vstride), conv, lv.py + q, lv.pyF + q);
+    }
+#else
+    for (int q = 0; q < padded; ++q) {
+        const int n = lv.cell[q];
+        const bool c = rowX[n] == kConverged;
+        const float* rx = base + size_t(uint16_t(rowX[n])) * kRowFloats;
+        const float* ry = base + size_t(uint16_t(rowY[n])) * kRowFloats;
+        lv.px[q] = lv.pxF[q] = c || lv.outX[q] ? 0.f : sampleLinear(rx, kRes, lv.ux[q]);
+        lv.py[q] = lv.pyF[q] = c || lv.outY[q] ? 0.f : sampleLinear(ry, kRes, lv.uy[q]);
     }
 #endif
 }

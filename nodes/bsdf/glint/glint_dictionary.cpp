@@ -155,7 +155,11 @@ float Dictionary::sampleMarginal(int level, int marginal, float u) const {
         return p[kRes - 1] > 0.f ? std::min(x0 + (target - c[kRes - 1]) / p[kRes - 1], float(4.0 * kSigmaO)) : x0;
     }
     // Segment i with c[i] < target <= c[i+1] (c is non-decreasing; zero-mass segments are skipped by the search).
-    const int i = int(std::upper_bound(c, c + kRes, target) - c) - 1;
+    // std::upper_bound over the 64 nodes without data-dependent branches: count the nodes <= target by halving steps
+    // (the same index; the CDF rows are read at random, so mispredicted branches would serialise the misses).
+    const float* b = c;
+    for (int step = kRes / 2; step > 0; step >>= 1) b = target < b[step - 1] ? b : b + step;
+    const int i = int(b - c) - 1;
     const float r = (target - c[i]) / delta, dp = p[i + 1] - p[i];
     // Solve p_i f + dp f^2 / 2 = r in the stable form f = 2r / (p_i + sqrt(p_i^2 + 2 dp r)).
     const float disc = std::sqrt(std::max(p[i] * p[i] + 2.f * dp * r, 0.f));
