@@ -167,6 +167,7 @@ void Integrator::shadeCameraHits(const RayDifferential* rays, size_t n, ScratchA
             if (scene_.shapes[hit.shape].areaLight >= 0) continue;  // lights do not scatter: li answers alone
             v.sp.depth = 0;
             v.shaded = true;
+            v.closure.clear();  // as li clears its closure before shading: a Material may add to what it is given
             materialOf[shadedCount] = uint32_t(scene_.shapes[hit.shape].material);
             vertexOf[shadedCount] = begin + k;
             closures[shadedCount] = &v.closure;
