@@ -500,8 +500,8 @@ void Program::preRead(Instr& ins, const ParamLayout& layout, uint32_t dynamicPor
     data_.push_back(std::shared_ptr<const void>(block, block.get()));
 }
 
-void Program::execute(const ShadingPoint& sp, ScratchArena& arena, float* r, Closure** cl, Color3* em, Closure* out,
-                      Color3* emission, bool wholeRegisterFile) const {
+EvalContext Program::prepare(const ShadingPoint& sp, ScratchArena& arena, float* r, Closure** cl, Color3* em, Closure* out,
+                             bool wholeRegisterFile) const {
     if (wholeRegisterFile || readsTemplate_) std::memcpy(r, tmpl_.data(), tmpl_.size() * sizeof(float));
     for (size_t s = 0; s < slots_; ++s) {
         em[s] = Color3(0.f);
@@ -518,6 +518,12 @@ void Program::execute(const ShadingPoint& sp, ScratchArena& arena, float* r, Clo
     ctx.arena = &arena;
     ctx.closures = cl;
     ctx.emission = em;
+    return ctx;
+}
+
+void Program::execute(const ShadingPoint& sp, ScratchArena& arena, float* r, Closure** cl, Color3* em, Closure* out,
+                      Color3* emission, bool wholeRegisterFile) const {
+    EvalContext ctx = prepare(sp, arena, r, cl, em, out, wholeRegisterFile);
     for (const Instr& ins : code_) ins.fn(ctx, ins);
     if (emission) *emission = outSlot_ >= 0 ? em[outSlot_] : Color3(0.f);
 }
@@ -560,26 +566,8 @@ void Program::shadeBatch(const ShadingPoint* const* sps, size_t n, ScratchArena&
     EvalContext ctx[kMaxBatch];
     for (size_t begin = 0; begin < n; begin += sub) {
         const size_t m = std::min(sub, n - begin);
-        for (size_t k = 0; k < m; ++k) {
-            float* rk = r + k * regs;
-            Closure** clk = cl + k * slots;
-            Color3* emk = em + k * slots;
-            const ShadingPoint& sp = *sps[begin + k];
-            // The per-point prologue of execute(), point by point.
-            if (readsTemplate_) std::memcpy(rk, tmpl_.data(), tmpl_.size() * sizeof(float));
-            for (size_t s = 0; s < slots_; ++s) {
-                emk[s] = Color3(0.f);
-                clk[s] = int(s) == outSlot_ ? out[begin + k] : new (arena.allocate(sizeof(Closure), alignof(Closure))) Closure();
-            }
-            for (const Load& l : prologue_) loadBinding(l.binding, sp, rk + l.reg);
-            EvalContext& c = ctx[k];
-            c.r = rk;
-            c.constants = tmpl_.data();
-            c.sp = &sp;
-            c.arena = &arena;
-            c.closures = clk;
-            c.emission = emk;
-        }
+        for (size_t k = 0; k < m; ++k)  // execute()'s prologue, point by point
+            ctx[k] = prepare(*sps[begin + k], arena, r + k * regs, cl + k * slots, em + k * slots, out[begin + k], false);
         for (const Instr& ins : code_) {
             if (ins.batchFn) {
                 ins.batchFn(ctx, m, ins);

@@ -90,6 +90,9 @@ public:
 private:
     // Fills ins.constParams with the ports of 'layout' that are constant in this program (Instr::constParams).
     void preRead(Instr& ins, const ParamLayout& layout, uint32_t dynamicPorts);
+    // The registers, closure pool and context of one shade at sp, before the first instruction (execute, shadeBatch).
+    EvalContext prepare(const ShadingPoint& sp, ScratchArena& arena, float* r, Closure** cl, Color3* em, Closure* out,
+                        bool wholeRegisterFile) const;
     // wholeRegisterFile: run() hands the registers out, so the template is copied even where no instruction reads it.
     void execute(const ShadingPoint& sp, ScratchArena& arena, float* r, Closure** cl, Color3* em, Closure* out, Color3* emission,
                  bool wholeRegisterFile) const;

@@ -74,6 +74,38 @@ bool Accel::intersect(const Ray& ray, Hit& hit) const {
     return true;
 }
 
+namespace {
+// A ray as Embree takes it (no motion blur, every geometry visible), with no hit yet.
+RTCRayHit toRtcRayHit(const Ray& ray, unsigned id) {
+    RTCRayHit r;
+    r.ray.org_x = ray.o.x;
+    r.ray.org_y = ray.o.y;
+    r.ray.org_z = ray.o.z;
+    r.ray.dir_x = ray.d.x;
+    r.ray.dir_y = ray.d.y;
+    r.ray.dir_z = ray.d.z;
+    r.ray.tnear = ray.tMin;
+    r.ray.tfar = ray.tMax;
+    r.ray.time = 0.f;
+    r.ray.mask = 0xFFFFFFFF;
+    r.ray.id = id;
+    r.ray.flags = 0;
+    r.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    r.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    return r;
+}
+// Embree's answer as a Hit (unrefined); false on a miss.
+bool fromRtcRayHit(const RTCRayHit& r, Hit& hit) {
+    if (r.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
+    hit.t = r.ray.tfar;
+    hit.shape = r.hit.geomID;
+    hit.prim = r.hit.primID;
+    hit.b1 = r.hit.u;
+    hit.b2 = r.hit.v;
+    return true;
+}
+}  // namespace
+
 void Accel::intersectStream(const Ray* rays, size_t n, Hit* hits, uint8_t* found) const {
     if (gRayObserver) gRayObserver->onStream(rays, n);
     embreeIntersectStream(rays, n, hits, found);
@@ -89,65 +121,18 @@ void Accel::embreeIntersectStream(const Ray* rays, size_t n, Hit* hits, uint8_t*
     ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
     for (size_t begin = 0; begin < n; begin += kChunk) {
         const size_t m = std::min(kChunk, n - begin);
-        for (size_t k = 0; k < m; ++k) {
-            const Ray& ray = rays[begin + k];
-            RTCRayHit& r = rh[k];
-            r.ray.org_x = ray.o.x;
-            r.ray.org_y = ray.o.y;
-            r.ray.org_z = ray.o.z;
-            r.ray.dir_x = ray.d.x;
-            r.ray.dir_y = ray.d.y;
-            r.ray.dir_z = ray.d.z;
-            r.ray.tnear = ray.tMin;
-            r.ray.tfar = ray.tMax;
-            r.ray.time = 0.f;
-            r.ray.mask = 0xFFFFFFFF;
-            r.ray.id = unsigned(k);
-            r.ray.flags = 0;
-            r.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-            r.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-        }
+        for (size_t k = 0; k < m; ++k) rh[k] = toRtcRayHit(rays[begin + k], unsigned(k));
         rtcIntersect1M(impl_->scene, &ctx, rh, unsigned(m), sizeof(RTCRayHit));
-        for (size_t k = 0; k < m; ++k) {
-            const RTCRayHit& r = rh[k];
-            Hit& hit = hits[begin + k];
-            found[begin + k] = r.hit.geomID != RTC_INVALID_GEOMETRY_ID;
-            if (!found[begin + k]) continue;
-            hit.t = r.ray.tfar;
-            hit.shape = r.hit.geomID;
-            hit.prim = r.hit.primID;
-            hit.b1 = r.hit.u;
-            hit.b2 = r.hit.v;
-        }
+        for (size_t k = 0; k < m; ++k) found[begin + k] = fromRtcRayHit(rh[k], hits[begin + k]);
     }
 }
 
 bool Accel::embreeIntersect(const Ray& ray, Hit& hit) const {
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
-    RTCRayHit rh;
-    rh.ray.org_x = ray.o.x;
-    rh.ray.org_y = ray.o.y;
-    rh.ray.org_z = ray.o.z;
-    rh.ray.dir_x = ray.d.x;
-    rh.ray.dir_y = ray.d.y;
-    rh.ray.dir_z = ray.d.z;
-    rh.ray.tnear = ray.tMin;
-    rh.ray.tfar = ray.tMax;
-    rh.ray.time = 0.f;
-    rh.ray.mask = 0xFFFFFFFF;
-    rh.ray.id = 0;
-    rh.ray.flags = 0;
-    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    RTCRayHit rh = toRtcRayHit(ray, 0);
     rtcIntersect1(impl_->scene, &ctx, &rh);
-    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
-    hit.t = rh.ray.tfar;
-    hit.shape = rh.hit.geomID;
-    hit.prim = rh.hit.primID;
-    hit.b1 = rh.hit.u;
-    hit.b2 = rh.hit.v;
-    return true;
+    return fromRtcRayHit(rh, hit);
 }
 
 // Embree picks its kernels by the CPU's ISA at run time, and their t, u, v differ in the last bits between SSE,
