@@ -192,14 +192,8 @@ struct GlintCellSet {
             // exceeds a texel (rho > 1), then the sums in cell order. A term the per-query pipeline skips (a zero
             // lookup) is an exact +0 here, which leaves the sums unchanged.
             lookupMip0(base, lv);
-            for (int f = 0; f < lv.nFilteredX; ++f) {  // one list per axis: no branch on rho here
-                const int q = lv.filteredX[f];
-                lv.pxF[q] = textureGradFiltered(base + size_t(uint16_t(rowX[lv.cell[q]])) * kRowFloats, lv.ux[q], lv.rhoX[q]);
-            }
-            for (int f = 0; f < lv.nFilteredY; ++f) {
-                const int q = lv.filteredY[f];
-                lv.pyF[q] = textureGradFiltered(base + size_t(uint16_t(rowY[lv.cell[q]])) * kRowFloats, lv.uy[q], lv.rhoY[q]);
-            }
+            lookupFiltered(base, rowX, lv.cell, lv.filteredX, lv.nFilteredX, lv.ux, lv.rhoX, lv.pxF);  // one list per axis
+            lookupFiltered(base, rowY, lv.cell, lv.filteredY, lv.nFilteredY, lv.uy, lv.rhoY, lv.pyF);
             float sumF = 0.f, sumU = 0.f;
             for (int q = 0; q < lv.count; ++q) {
                 const int n = lv.cell[q];
@@ -248,6 +242,8 @@ private:
         alignas(16) float px[kCapacity], py[kCapacity], pxF[kCapacity], pyF[kCapacity];
     };
     void lookupMip0(const float* base, LiveCells& lv) const;
+    static void lookupFiltered(const float* base, const int16_t* rows, const int* cell, const int* list, int count,
+                               const float* u, const float* rho, float* result);
     void liveCells(const float* base, int lev, Vec2 mh, bool ggaa, Vec2 gx, Vec2 gy, bool dictionaryZero,
                    LiveCells& lv) const;
     // The texels a live cell's lookups will read: the rows (1.5 MB in all) are read at random, so the lookups are
@@ -489,6 +485,73 @@ inline void GlintCellSet::lookupMip0(const float* base, LiveCells& lv) const {
         const float* ry = base + size_t(uint16_t(rowY[n])) * kRowFloats;
         lv.px[q] = lv.pxF[q] = c || lv.outX[q] ? 0.f : sampleLinear(rx, kRes, lv.ux[q]);
         lv.py[q] = lv.pyF[q] = c || lv.outY[q] ? 0.f : sampleLinear(ry, kRes, lv.uy[q]);
+    }
+#endif
+}
+
+// Pass 2's GGAA-filtered lookups (textureGradFiltered, the same float operations) of the cells in list (an axis
+// whose kernel exceeds a texel, rho > 1), kLanes at a time: log2 rho per lane from the library (its bits decide the
+// MIP blend), then the two MIPs' texel pairs and weights in SSE2 and the texels gathered by scalar loads. MIP m has
+// 2^(6 - m) texels at offset 128 - 2^(7 - m); a lane with MIP 6 alone (blend weight 0) reads MIP 6 twice and keeps
+// the first value, as textureGradFiltered returns v0 without reading MIP 7.
+inline void GlintCellSet::lookupFiltered(const float* base, const int16_t* rows, const int* cell, const int* list,
+                                         int count, const float* u, const float* rho, float* result) {
+#if defined(__SSE2__)
+    const __m128 vhalf = _mm_set1_ps(0.5f), vone = _mm_set1_ps(1.f), vzero = _mm_setzero_ps();
+    const __m128 vlastMip = _mm_set1_ps(float(kMips - 1));
+    const __m128i izero = _mm_setzero_si128(), ione = _mm_set1_epi32(1), i128 = _mm_set1_epi32(2 * kRes);
+    for (int f = 0; f < count; f += kLanes) {
+        alignas(16) float lu[kLanes], lmu[kLanes];
+        alignas(16) int32_t lrow[kLanes];
+        int q[kLanes];
+        for (int k = 0; k < kLanes; ++k) {
+            q[k] = list[f + k < count ? f + k : f];
+            lu[k] = u[q[k]];
+            lmu[k] = std::log2(rho[q[k]]);
+            lrow[k] = int32_t(uint16_t(rows[cell[q[k]]])) * kRowFloats;
+        }
+        // textureGradLodOf: mu = min(log2 rho, L_mip), m0 = floor(mu) (mu > 0), weight of m0 + 1 = mu - m0 below MIP 6
+        const __m128 mu = _mm_min_ps(_mm_load_ps(lmu), vlastMip);
+        const __m128i m0 = _mm_cvttps_epi32(mu);
+        const __m128 m0f = _mm_cvtepi32_ps(m0);
+        const __m128 below = _mm_cmplt_ps(m0f, vlastMip);
+        const __m128 bf = _mm_and_ps(below, _mm_sub_ps(mu, m0f));
+        // 2^(6 - m0) as a float from its exponent; the next MIP has half as many texels (MIP 6 lanes: read MIP 6 again)
+        const __m128i n0i = _mm_cvttps_epi32(_mm_castsi128_ps(_mm_slli_epi32(_mm_sub_epi32(_mm_set1_epi32(127 + kMips - 1), m0), 23)));
+        const __m128i n1i = _mm_or_si128(_mm_andnot_si128(_mm_castps_si128(below), n0i),
+                                         _mm_and_si128(_mm_castps_si128(below), _mm_srli_epi32(n0i, 1)));
+        const __m128 vu = _mm_load_ps(lu);
+        const __m128i row = _mm_load_si128(reinterpret_cast<const __m128i*>(lrow));
+        // sampleLinear(row + mipOffset(m), n, u) for u in [0, 1): texels max(i0, 0), min(i0 + 1, n - 1)
+        const auto linear = [&](__m128i n) {
+            const __m128 t = _mm_sub_ps(_mm_mul_ps(vu, _mm_cvtepi32_ps(n)), vhalf);
+            __m128i i0 = _mm_cvttps_epi32(t);
+            i0 = _mm_add_epi32(i0, _mm_castps_si128(_mm_cmplt_ps(t, _mm_cvtepi32_ps(i0))));
+            const __m128 w = _mm_sub_ps(t, _mm_cvtepi32_ps(i0));
+            const __m128i a = _mm_and_si128(i0, _mm_cmpgt_epi32(i0, izero));
+            __m128i b = _mm_add_epi32(i0, ione);
+            const __m128i last = _mm_sub_epi32(n, ione);
+            const __m128i bBig = _mm_cmpgt_epi32(b, last);
+            b = _mm_or_si128(_mm_andnot_si128(bBig, b), _mm_and_si128(bBig, last));
+            const __m128i offset = _mm_add_epi32(row, _mm_sub_epi32(i128, _mm_add_epi32(n, n)));  // mipOffset
+            alignas(16) int32_t ia[kLanes], ib[kLanes];
+            _mm_store_si128(reinterpret_cast<__m128i*>(ia), _mm_add_epi32(offset, a));
+            _mm_store_si128(reinterpret_cast<__m128i*>(ib), _mm_add_epi32(offset, b));
+            const __m128 ta = _mm_setr_ps(base[ia[0]], base[ia[1]], base[ia[2]], base[ia[3]]);
+            const __m128 tb = _mm_setr_ps(base[ib[0]], base[ib[1]], base[ib[2]], base[ib[3]]);
+            return _mm_add_ps(_mm_mul_ps(_mm_sub_ps(vone, w), ta), _mm_mul_ps(w, tb));
+        };
+        const __m128 v0 = linear(n0i), v1 = linear(n1i);
+        const __m128 mixed = _mm_add_ps(_mm_mul_ps(_mm_sub_ps(vone, bf), v0), _mm_mul_ps(bf, v1));
+        const __m128 useMix = _mm_cmpgt_ps(bf, vzero);  // !(f > 0): v0 alone
+        alignas(16) float out[kLanes];
+        _mm_store_ps(out, _mm_or_ps(_mm_and_ps(useMix, mixed), _mm_andnot_ps(useMix, v0)));
+        for (int k = 0; k < kLanes && f + k < count; ++k) result[q[k]] = out[k];
+    }
+#else
+    for (int f = 0; f < count; ++f) {
+        const int q = list[f];
+        result[q] = textureGradFiltered(base + size_t(uint16_t(rows[cell[q]])) * kRowFloats, u[q], rho[q]);
     }
 #endif
 }
