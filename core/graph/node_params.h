@@ -2,6 +2,7 @@
 // list binding each member to its port; PortSpecs, the typed CPU read and the GLSL enum constants all come from it.
 #pragma once
 
+#include "core/graph/load_binding.h"
 #include "core/graph/node_spec.h"
 
 #include <array>

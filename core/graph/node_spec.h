@@ -50,8 +50,7 @@ TypeDesc bindingType(GeomBinding b);
 const char* bindingGlsl(GeomBinding b);
 // Whether the binding is a screen-space differential (its value needs the shading point's derivatives).
 bool isDerivativeBinding(GeomBinding b);
-// Writes the binding's value (typeWidth(bindingType(b)) floats) for a shading point.
-void loadBinding(GeomBinding b, const ShadingPoint& sp, float* dst);
+// loadBinding (the value of a binding at a shading point): core/graph/load_binding.h.
 
 // Value names of a typed enum port and the prefix of its generated GLSL constants (node_params.h, SPECULA_ENUM).
 struct EnumDesc {
