@@ -10,7 +10,6 @@
 #include <algorithm>
 #include <atomic>
 #include <cstdint>
-#include <cstring>
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -90,9 +89,9 @@ inline int forEachCell(int l, Vec2 uv, Vec2 a1, Vec2 a2, Visit&& visit) {
 // the result is bit-identical to the per-query pipeline. Sampling uses the normalised weights
 // w_c = (blend weight) W_c / sum_level W of the non-empty cells.
 //
-// Layout (issue 37 item 3): structure of arrays, each level's cells starting at a multiple of kLanes, so a query's
-// first pass (rotation, S4.8, the support test, the GGAA kernel size) runs kLanes cells at a time without branches.
-// That pass does the same float operations per cell as the scalar code (mul, add, abs, div, compare; no FMA, no
+// Layout (issue 37 item 3): structure of arrays, each level's cells starting at a multiple of kLanes, so a query
+// (rotation, S4.8, the support test, the GGAA kernel size, the lookups, the terms) runs kLanes cells at a time
+// (levelSums). It does the same float operations per cell as the scalar code (mul, add, abs, div, compare; no FMA, no
 // reciprocal), so every CPU gets the same bits, with or without SSE2. Padding lanes are dead (cos = sin = 0 rotates
 // to m = 0, an empty support [lo, hi] = [kRes, -1] rejects every lookup, rho = 0).
 
@@ -103,7 +102,7 @@ struct GlintSdfPair {
 };
 
 struct GlintCellSet {
-    static constexpr int kLanes = 4;                                 // cells per step of a query's first pass
+    static constexpr int kLanes = 4;                                 // cells per step of a query
     static constexpr int kLevelCapacity = (kCellCap + kLanes - 1) / kLanes * kLanes;  // forEachCell's cap, padded
     static constexpr int kMaxCells = 2 * kLevelCapacity;             // two LODs
     static constexpr int16_t kConverged = -1;  // rowX of a cell with k = L (analytic P_B, S4.6)
@@ -179,33 +178,9 @@ struct GlintCellSet {
         const bool dictionaryZero = !(glm::dot(mh, mh) < 2.00002f * lim * lim);
         const float* base = dict.data().data();
         float levelF[2] = {0.f, 0.f}, levelU[2] = {0.f, 0.f};
-        // Pass 1 (kLanes cells at a time), both levels before any lookup so the prefetches have time to land:
-        // rotation, the S4.8 test, and the support test (a lookup that reads only zero texels is 0; with GGAA only
-        // where the kernel is under one texel, rho <= 1, so MIP 0 is what is read); the surviving cells' texels are
-        // prefetched. Pass 2 looks them up in cell order: the sums add the same terms as levelSdf.
-        LiveCells live[2];
-        for (int lev = 0; lev < levels; ++lev) liveCells(base, lev, mh, ggaa, gx, gy, dictionaryZero, live[lev]);
         for (int lev = 0; lev < levels; ++lev) {
-            LiveCells& lv = live[lev];
-            // Pass 2: the MIP-0 lookups of every live cell without branches (an axis that reads only zeros is 0; so is
-            // a converged cell's, whose term is W P_B), then the GGAA-filtered lookups of the cells whose kernel
-            // exceeds a texel (rho > 1), then the sums in cell order. A term the per-query pipeline skips (a zero
-            // lookup) is an exact +0 here, which leaves the sums unchanged.
-            lookupMip0(base, lv);
-            lookupFiltered(base, rowX, lv.cell, lv.filteredX, lv.nFilteredX, lv.ux, lv.rhoX, lv.pxF);  // one list per axis
-            lookupFiltered(base, rowY, lv.cell, lv.filteredY, lv.nFilteredY, lv.uy, lv.rhoY, lv.pyF);
             float sumF = 0.f, sumU = 0.f;
-            for (int q = 0; q < lv.count; ++q) {
-                const int n = lv.cell[q];
-                if (rowX[n] == kConverged) {  // S4.6
-                    sumF += weight[n] * pB;
-                    if constexpr (kUnfiltered) sumU += weight[n] * pB;
-                    continue;
-                }
-                // C21 Eq. 4 (GGAA off: pxF = px, pyF = py) and Eq. 15
-                sumF += weight[n] * (shape.detMinv * lv.pxF[q] * lv.pyF[q]);
-                if constexpr (kUnfiltered) sumU += weight[n] * (shape.detMinv * lv.px[q] * lv.py[q]);
-            }
+            levelSums<kUnfiltered>(base, lev, shape.detMinv, mh, pB, ggaa, gx, gy, dictionaryZero, sumF, sumU);
             levelF[lev] = sumW[lev] > 0.f ? sumF / sumW[lev] : 0.f;
             levelU[lev] = sumW[lev] > 0.f ? sumU / sumW[lev] : 0.f;
         }
@@ -228,41 +203,10 @@ struct GlintCellSet {
     bool sampleSlope(const Dictionary& dict, const GlintShape& shape, Vec2 u, Vec2& slope) const;
 
 private:
-    // The cells of one level that a query must look up (pass 1 of evaluate), in cell order (index q), with their
-    // lookup coordinates u = |m| / (4 sigma_o), GGAA kernel sizes rho = R max(|g1|, |g2|), whether the axis's MIP-0
-    // lookup reads only zeros, the cells with a kernel over one texel per axis (filteredX, filteredY), and pass 2's
-    // lookups: MIP 0 (px, py)
-    // and GGAA-filtered (pxF, pyF; equal to px, py where rho <= 1). Arrays padded to whole lanes.
-    struct LiveCells {
-        static constexpr int kCapacity = kLevelCapacity + kLanes;
-        int count = 0, nFilteredX = 0, nFilteredY = 0;
-        int cell[kCapacity], filteredX[kCapacity], filteredY[kCapacity];
-        alignas(16) float ux[kCapacity], uy[kCapacity], rhoX[kCapacity], rhoY[kCapacity];
-        alignas(16) int32_t outX[kCapacity], outY[kCapacity];
-        alignas(16) float px[kCapacity], py[kCapacity], pxF[kCapacity], pyF[kCapacity];
-    };
-    void lookupMip0(const float* base, LiveCells& lv) const;
-    static void lookupFiltered(const float* base, const int16_t* rows, const int* cell, const int* list, int count,
-                               const float* u, const float* rho, float* result);
-    void liveCells(const float* base, int lev, Vec2 mh, bool ggaa, Vec2 gx, Vec2 gy, bool dictionaryZero,
-                   LiveCells& lv) const;
-    // The texels a live cell's lookups will read: the rows (1.5 MB in all) are read at random, so the lookups are
-    // bound by memory latency; the prefetches are in flight while the earlier cells' lookups run.
-    // With a GGAA kernel over one texel (rho > 1) also the two MIPs textureGradFiltered blends, floor(log2 rho) and the
-    // next, taken from rho's exponent (a prefetch needs no exact MIP).
-    void prefetchRows(const float* base, int n, float ux, float uy, float rhoX, float rhoY) const {
-        prefetchLookup(base + size_t(uint16_t(rowX[n])) * kRowFloats, ux, rhoX);
-        prefetchLookup(base + size_t(uint16_t(rowY[n])) * kRowFloats, uy, rhoY);
-    }
-    static void prefetchLookup(const float* row, float u, float rho) {
-        __builtin_prefetch(row + int(u * float(kRes)));
-        if (!(rho > 1.f)) return;
-        uint32_t bits;
-        std::memcpy(&bits, &rho, sizeof bits);
-        const int m = std::clamp(int(bits >> 23) - 127, 0, kMips - 2);
-        __builtin_prefetch(row + mipOffset(m) + int(u * float(mipRes(m))));
-        __builtin_prefetch(row + mipOffset(m + 1) + int(u * float(mipRes(m + 1))));
-    }
+    // sum_c W_c P_c of the cells of level lev, filtered and (kUnfiltered) unfiltered, in cell order (S3.6).
+    template <bool kUnfiltered>
+    void levelSums(const float* base, int lev, float detMinv, Vec2 mh, float pB, bool ggaa, Vec2 gx, Vec2 gy,
+                   bool dictionaryZero, float& sumF, float& sumU) const;
 
     void addLevel(CellMemo& memo, const uint8_t* support, const GlintParams& p, int l, Vec2 uv, const Footprint& fp) {
         const float lc = p.logDensity / 1.38629436f - float(kLevels - 1) + float(l);  // S4.4
@@ -303,48 +247,104 @@ private:
     }
 };
 
-// Pass 1 of a query for the cells of level lev. Per cell, exactly the scalar operations of the per-query pipeline
-// (cellSdf): m = Rot(-theta) mh, S4.8, u = |m| / (4 sigma_o), the MIP-0 texel pair of u against the row's support, and
-// the GGAA kernel Rot(-theta) g scaled to texels (S5.2-S5.4); live = converged, or inside S4.8 with neither axis
-// reading only zeros at MIP 0 under a kernel of at most one texel.
-inline void GlintCellSet::liveCells(const float* base, int lev, Vec2 mh, bool ggaa, Vec2 gx, Vec2 gy,
-                                    bool dictionaryZero, LiveCells& lv) const {
+// One query's sums over the cells of level lev, kLanes cells at a time, in one pass without compaction (about three
+// quarters of the cells survive S4.8 and the support test in the renders, so gathering the survivors first cost
+// more than it saved). Per cell, exactly the scalar operations of the per-query pipeline (cellSdf): m = Rot(-theta)
+// mh, S4.8, u = |m| / (4 sigma_o), the MIP-0 texel pair of u against the row's support (a lookup that reads only
+// zero texels is 0), the GGAA kernel Rot(-theta) g scaled to texels rho (S5.2-S5.4), the MIP-0 lookups
+// (sampleLinear) and where rho > 1 the filtered ones (textureGradFiltered: the MIP from the library's log2, whose
+// bits decide the blend), then the term W (detMinv px py) (C21 Eq. 4 and Eq. 15; a converged cell's is W P_B, S4.6).
+// A cell the per-query pipeline skips (zeroed by S4.8, an axis reading only zeros under a kernel of at most one
+// texel, a dead padding lane) adds an exact +0, which leaves the sums, added lane by lane in cell order, unchanged.
+// Every float operation is the scalar one (mul, add, sub, div, compare; no FMA, no reciprocal), so every CPU gets the
+// same bits with or without SSE2. Texels are gathered by scalar loads; a lane that must not read reads texel 0.
+template <bool kUnfiltered>
+inline void GlintCellSet::levelSums(const float* base, int lev, float detMinv, Vec2 mh, float pB, bool ggaa, Vec2 gx,
+                                    Vec2 gy, bool dictionaryZero, float& sumF, float& sumU) const {
     const int begin = levelBegin[lev], end = levelEnd[lev];
-    const int endPadded = (end + kLanes - 1) / kLanes * kLanes;
     const float lim = float(4.0 * kSigmaO);
-    lv.count = lv.nFilteredX = lv.nFilteredY = 0;
+    float sf = 0.f, su = 0.f;
 #if defined(__SSE2__)
+    const int endPadded = (end + kLanes - 1) / kLanes * kLanes;
     const __m128 vmhx = _mm_set1_ps(mh.x), vmhy = _mm_set1_ps(mh.y);
     const __m128 vgxx = _mm_set1_ps(gx.x), vgxy = _mm_set1_ps(gx.y), vgyx = _mm_set1_ps(gy.x), vgyy = _mm_set1_ps(gy.y);
     const __m128 vlim = _mm_set1_ps(lim), vres = _mm_set1_ps(float(kRes)), vhalf = _mm_set1_ps(0.5f);
-    const __m128 vone = _mm_set1_ps(1.f), vzero = _mm_setzero_ps();
+    const __m128 vone = _mm_set1_ps(1.f), vzero = _mm_setzero_ps(), vpB = _mm_set1_ps(pB);
+    const __m128 vdet = _mm_set1_ps(detMinv), vlastMip = _mm_set1_ps(float(kMips - 1));
     const __m128 absMask = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
     const __m128 signMask = _mm_castsi128_ps(_mm_set1_epi32(int(0x80000000u)));
+    const __m128 allOnes = _mm_castsi128_ps(_mm_set1_epi32(-1));
     const __m128i vlast = _mm_set1_epi32(kRes - 1), vconv = _mm_set1_epi32(kConverged), izero = _mm_setzero_si128();
+    const __m128i ione = _mm_set1_epi32(1), vstride = _mm_set1_epi32(kRowFloats), i128 = _mm_set1_epi32(2 * kRes);
     const auto load4 = [](const int16_t* p) {  // 4 int16 -> 4 int32, sign-extended
         const __m128i v = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(p));
         return _mm_srai_epi32(_mm_unpacklo_epi16(v, v), 16);
     };
-    // The MIP-0 texel pair of u (sampleLinear on [0, 1)): i0 = floor(u R - 1/2), reads max(i0, 0) and min(i0 + 1,
-    // R - 1); outside when min(i0 + 1, R - 1) < lo or max(i0, 0) > hi (lookupOutsideSupport). floor as truncation
-    // corrected by one where the truncation rounded up (t < 0), exact for |t| < 2^31.
-    const auto outside = [&](__m128 u, __m128i lo, __m128i hi) {
-        const __m128 t = _mm_sub_ps(_mm_mul_ps(u, vres), vhalf);
-        __m128i i0 = _mm_cvttps_epi32(t);
-        i0 = _mm_add_epi32(i0, _mm_castps_si128(_mm_cmplt_ps(t, _mm_cvtepi32_ps(i0))));
-        __m128i a = _mm_add_epi32(i0, _mm_set1_epi32(1));
-        const __m128i aBig = _mm_cmpgt_epi32(a, vlast);
-        a = _mm_or_si128(_mm_andnot_si128(aBig, a), _mm_and_si128(aBig, vlast));
+    const auto mul = [](__m128i a, __m128i b) {  // 32-bit products of small non-negative values (SSE2)
+        const __m128i even = _mm_mul_epu32(a, b), odd = _mm_mul_epu32(_mm_srli_epi64(a, 32), _mm_srli_epi64(b, 32));
+        return _mm_unpacklo_epi32(_mm_shuffle_epi32(even, _MM_SHUFFLE(0, 0, 2, 0)),
+                                  _mm_shuffle_epi32(odd, _MM_SHUFFLE(0, 0, 2, 0)));
+    };
+    // floor(t) as truncation corrected by one where the truncation rounded up (t < 0), exact for |t| < 2^31
+    const auto floorInt = [](__m128 t) {
+        const __m128i i = _mm_cvttps_epi32(t);
+        return _mm_add_epi32(i, _mm_castps_si128(_mm_cmplt_ps(t, _mm_cvtepi32_ps(i))));
+    };
+    const auto minInt = [](__m128i a, __m128i b) {
+        const __m128i big = _mm_cmpgt_epi32(a, b);
+        return _mm_or_si128(_mm_andnot_si128(big, a), _mm_and_si128(big, b));
+    };
+    // sampleLinear on n texels at offset (row + MIP offset) for u in [0, 1): (1 - f) tex[max(i0, 0)] + f tex[min(i0 + 1,
+    // n - 1)] with i0 = floor(u n - 1/2); lanes of skip read texel 0 of the table and return +0.
+    const auto linear = [&](__m128 u, __m128 n, __m128i offset, __m128i skip) {
+        const __m128 t = _mm_sub_ps(_mm_mul_ps(u, n), vhalf);
+        const __m128i i0 = floorInt(t);
+        const __m128 f = _mm_sub_ps(t, _mm_cvtepi32_ps(i0));
+        const __m128i a = _mm_and_si128(i0, _mm_cmpgt_epi32(i0, izero));
+        const __m128i b = minInt(_mm_add_epi32(i0, ione), _mm_sub_epi32(_mm_cvttps_epi32(n), ione));
+        alignas(16) int32_t ia[kLanes], ib[kLanes];
+        _mm_store_si128(reinterpret_cast<__m128i*>(ia), _mm_andnot_si128(skip, _mm_add_epi32(offset, a)));
+        _mm_store_si128(reinterpret_cast<__m128i*>(ib), _mm_andnot_si128(skip, _mm_add_epi32(offset, b)));
+        const __m128 ta = _mm_setr_ps(base[ia[0]], base[ia[1]], base[ia[2]], base[ia[3]]);
+        const __m128 tb = _mm_setr_ps(base[ib[0]], base[ib[1]], base[ib[2]], base[ib[3]]);
+        const __m128 v = _mm_add_ps(_mm_mul_ps(_mm_sub_ps(vone, f), ta), _mm_mul_ps(f, tb));
+        return _mm_andnot_ps(_mm_castsi128_ps(skip), v);
+    };
+    // textureGradFiltered for the lanes of use (rho > 1): mu = min(log2 rho, 6), m0 = floor(mu) (mu > 0), blend weight
+    // of MIP m0 + 1 mu - m0 below MIP 6 (else MIP m0 alone, as textureGradFiltered returns v0 without reading MIP 7).
+    // MIP m has 2^(6 - m) texels at offset 128 - 2^(7 - m).
+    const auto filtered = [&](__m128 u, __m128 rho, __m128i row, __m128 use) {
+        alignas(16) float r[kLanes], lg[kLanes];
+        _mm_store_ps(r, rho);
+        const int bits = _mm_movemask_ps(use);
+        for (int k = 0; k < kLanes; ++k) lg[k] = (bits >> k) & 1 ? std::log2(r[k]) : 1.f;
+        const __m128 mu = _mm_min_ps(_mm_load_ps(lg), vlastMip);  // std::min(log2, 6) for non-NaN log2
+        const __m128i m0 = _mm_cvttps_epi32(mu);
+        const __m128 m0f = _mm_cvtepi32_ps(m0);
+        const __m128 below = _mm_cmplt_ps(m0f, vlastMip);
+        const __m128 bf = _mm_and_ps(below, _mm_sub_ps(mu, m0f));
+        const __m128 n0 = _mm_castsi128_ps(_mm_slli_epi32(_mm_sub_epi32(_mm_set1_epi32(127 + kMips - 1), m0), 23));
+        const __m128 n1 = _mm_or_ps(_mm_andnot_ps(below, n0), _mm_and_ps(below, _mm_mul_ps(n0, vhalf)));
+        const __m128i skip = _mm_castps_si128(_mm_andnot_ps(use, allOnes));
+        const auto offset = [&](__m128 n) { return _mm_add_epi32(row, _mm_sub_epi32(i128, _mm_cvttps_epi32(_mm_add_ps(n, n)))); };
+        const __m128 v0 = linear(u, n0, offset(n0), skip), v1 = linear(u, n1, offset(n1), skip);
+        const __m128 mixed = _mm_add_ps(_mm_mul_ps(_mm_sub_ps(vone, bf), v0), _mm_mul_ps(bf, v1));
+        const __m128 useMix = _mm_cmpgt_ps(bf, vzero);
+        return _mm_or_ps(_mm_and_ps(useMix, mixed), _mm_andnot_ps(useMix, v0));
+    };
+    const auto outside = [&](__m128 u, __m128i lo, __m128i hi) {  // lookupOutsideSupport
+        const __m128i i0 = floorInt(_mm_sub_ps(_mm_mul_ps(u, vres), vhalf));
+        const __m128i a = minInt(_mm_add_epi32(i0, ione), vlast);
         const __m128i b = _mm_and_si128(i0, _mm_cmpgt_epi32(i0, izero));
         return _mm_or_si128(_mm_cmplt_epi32(a, lo), _mm_cmpgt_epi32(b, hi));
     };
-    alignas(16) float tux[kLanes] = {0.f, 0.f, 0.f, 0.f}, tuy[kLanes] = {0.f, 0.f, 0.f, 0.f};
-    alignas(16) float trX[kLanes] = {0.f, 0.f, 0.f, 0.f}, trY[kLanes] = {0.f, 0.f, 0.f, 0.f};
-    alignas(16) int32_t toX[kLanes] = {0, 0, 0, 0}, toY[kLanes] = {0, 0, 0, 0};
-    int filteredBitsX = 0, filteredBitsY = 0;
+    alignas(16) float tf[kLanes], tu[kLanes];
     for (int n = begin; n < endPadded; n += kLanes) {
-        const __m128 conv = _mm_castsi128_ps(_mm_cmpeq_epi32(load4(rowX + n), vconv));
-        __m128 live = conv;
+        const __m128i rx = load4(rowX + n);
+        const __m128i convI = _mm_cmpeq_epi32(rx, vconv);
+        const __m128 W = _mm_load_ps(weight + n);
+        const __m128 convTerm = _mm_and_ps(_mm_castsi128_ps(convI), _mm_mul_ps(W, vpB));  // S4.6
+        __m128 termF = convTerm, termU = convTerm;
         if (!dictionaryZero) {
             const __m128 c = _mm_load_ps(cosT + n), s = _mm_load_ps(sinT + n), ns = _mm_xor_ps(s, signMask);
             const __m128 mx = _mm_add_ps(_mm_mul_ps(c, vmhx), _mm_mul_ps(s, vmhy));
@@ -352,8 +352,8 @@ inline void GlintCellSet::liveCells(const float* base, int lev, Vec2 mh, bool gg
             const __m128 ax = _mm_and_ps(mx, absMask), ay = _mm_and_ps(my, absMask);
             const __m128 cut = _mm_or_ps(_mm_cmpge_ps(ax, vlim), _mm_cmpge_ps(ay, vlim));  // S4.8
             const __m128 ux = _mm_div_ps(ax, vlim), uy = _mm_div_ps(ay, vlim);
-            const __m128i oX = outside(ux, load4(loX + n), load4(hiX + n));
-            const __m128i oY = outside(uy, load4(loY + n), load4(hiY + n));
+            const __m128 oX = _mm_castsi128_ps(outside(ux, load4(loX + n), load4(hiX + n)));
+            const __m128 oY = _mm_castsi128_ps(outside(uy, load4(loY + n), load4(hiY + n)));
             __m128 rX = vzero, rY = vzero;
             if (ggaa) {  // S5.2-S5.4: kernel s_K Rot(-theta) M^-1 d / (4 sigma_o), x components to the x marginal
                 const __m128 gxx = _mm_add_ps(_mm_mul_ps(c, vgxx), _mm_mul_ps(s, vgxy));
@@ -364,45 +364,50 @@ inline void GlintCellSet::liveCells(const float* base, int lev, Vec2 mh, bool gg
                 rX = _mm_mul_ps(vres, _mm_max_ps(_mm_and_ps(gyx, absMask), _mm_and_ps(gxx, absMask)));
                 rY = _mm_mul_ps(vres, _mm_max_ps(_mm_and_ps(gyy, absMask), _mm_and_ps(gxy, absMask)));
             }
-            const __m128 deadX = _mm_andnot_ps(_mm_cmpgt_ps(rX, vone), _mm_castsi128_ps(oX));
-            const __m128 deadY = _mm_andnot_ps(_mm_cmpgt_ps(rY, vone), _mm_castsi128_ps(oY));
-            live = _mm_or_ps(conv, _mm_andnot_ps(_mm_or_ps(cut, _mm_or_ps(deadX, deadY)), _mm_castsi128_ps(_mm_set1_epi32(-1))));
-            _mm_store_ps(tux, ux);
-            _mm_store_ps(tuy, uy);
-            _mm_store_ps(trX, rX);
-            _mm_store_ps(trY, rY);
-            _mm_store_si128(reinterpret_cast<__m128i*>(toX), oX);
-            _mm_store_si128(reinterpret_cast<__m128i*>(toY), oY);
-            filteredBitsX = _mm_movemask_ps(_mm_cmpgt_ps(rX, vone));
-            filteredBitsY = _mm_movemask_ps(_mm_cmpgt_ps(rY, vone));
+            const __m128 filtX = _mm_cmpgt_ps(rX, vone), filtY = _mm_cmpgt_ps(rY, vone);
+            const __m128 dead = _mm_or_ps(_mm_or_ps(cut, _mm_castsi128_ps(convI)),
+                                          _mm_or_ps(_mm_andnot_ps(filtX, oX), _mm_andnot_ps(filtY, oY)));
+            const __m128 live = _mm_andnot_ps(dead, allOnes);  // dictionary cells with a term
+            if (_mm_movemask_ps(live) != 0) {
+                const __m128i offX = mul(_mm_andnot_si128(convI, rx), vstride);  // k N + i < 2^15, >= 0 but kConverged
+                const __m128i offY = mul(_mm_andnot_si128(convI, load4(rowY + n)), vstride);
+                const __m128i deadI = _mm_castps_si128(dead);
+                const __m128 px = linear(ux, vres, offX, _mm_or_si128(deadI, _mm_castps_si128(oX)));
+                const __m128 py = linear(uy, vres, offY, _mm_or_si128(deadI, _mm_castps_si128(oY)));
+                __m128 pxF = px, pyF = py;
+                const __m128 useX = _mm_and_ps(live, filtX), useY = _mm_and_ps(live, filtY);
+                if (_mm_movemask_ps(useX) != 0)
+                    pxF = _mm_or_ps(_mm_and_ps(useX, filtered(ux, rX, offX, useX)), _mm_andnot_ps(useX, px));
+                if (_mm_movemask_ps(useY) != 0)
+                    pyF = _mm_or_ps(_mm_and_ps(useY, filtered(uy, rY, offY, useY)), _mm_andnot_ps(useY, py));
+                // C21 Eq. 4 (GGAA off: pxF = px, pyF = py) and Eq. 15, as W * (detMinv * px * py)
+                const __m128 f = _mm_mul_ps(W, _mm_mul_ps(_mm_mul_ps(vdet, pxF), pyF));
+                termF = _mm_or_ps(convTerm, _mm_and_ps(live, f));
+                if constexpr (kUnfiltered) {
+                    const __m128 u = _mm_mul_ps(W, _mm_mul_ps(_mm_mul_ps(vdet, px), py));
+                    termU = _mm_or_ps(convTerm, _mm_and_ps(live, u));
+                }
+            }
         }
-        int bits = _mm_movemask_ps(live);
-        while (bits != 0) {
-            const int b = __builtin_ctz(unsigned(bits));
-            bits &= bits - 1;
-            const int q = lv.count++;
-            lv.cell[q] = n + b;
-            lv.ux[q] = tux[b], lv.uy[q] = tuy[b], lv.rhoX[q] = trX[b], lv.rhoY[q] = trY[b];
-            lv.outX[q] = toX[b], lv.outY[q] = toY[b];
-            lv.filteredX[lv.nFilteredX] = q;
-            lv.nFilteredX += (filteredBitsX >> b) & 1;
-            lv.filteredY[lv.nFilteredY] = q;
-            lv.nFilteredY += (filteredBitsY >> b) & 1;
-            if (rowX[n + b] != kConverged) prefetchRows(base, n + b, tux[b], tuy[b], trX[b], trY[b]);
+        _mm_store_ps(tf, termF);
+        sf += tf[0], sf += tf[1], sf += tf[2], sf += tf[3];
+        if constexpr (kUnfiltered) {
+            _mm_store_ps(tu, termU);
+            su += tu[0], su += tu[1], su += tu[2], su += tu[3];
         }
     }
 #else
-    for (int n = begin; n < endPadded; ++n) {
-        if (rowX[n] == kConverged) {
-            const int q = lv.count++;
-            lv.cell[q] = n;
-            lv.ux[q] = lv.uy[q] = lv.rhoX[q] = lv.rhoY[q] = 0.f;
-            lv.outX[q] = lv.outY[q] = 0;
+    for (int n = begin; n < end; ++n) {
+        const float W = weight[n];
+        if (rowX[n] == kConverged) {  // S4.6
+            sf += W * pB;
+            su += W * pB;
             continue;
         }
         if (dictionaryZero) continue;
         const float c = cosT[n], s = sinT[n];
         const float mx = c * mh.x + s * mh.y, my = -s * mh.x + c * mh.y;
+        if (std::abs(mx) >= lim || std::abs(my) >= lim) continue;  // S4.8
         const float ux = std::abs(mx) / lim, uy = std::abs(my) / lim;
         const bool outX = lookupOutsideSupport(ux, loX[n], hiX[n]), outY = lookupOutsideSupport(uy, loY[n], hiY[n]);
         float rX = 0.f, rY = 0.f;
@@ -412,148 +417,18 @@ inline void GlintCellSet::liveCells(const float* base, int lev, Vec2 mh, bool gg
             rX = float(kRes) * std::max(std::abs(gxx), std::abs(gyx));
             rY = float(kRes) * std::max(std::abs(gxy), std::abs(gyy));
         }
-        if (std::abs(mx) >= lim || std::abs(my) >= lim) continue;  // S4.8
         if ((outX && !(rX > 1.f)) || (outY && !(rY > 1.f))) continue;
-        const int q = lv.count++;
-        lv.cell[q] = n;
-        lv.ux[q] = ux, lv.uy[q] = uy, lv.rhoX[q] = rX, lv.rhoY[q] = rY;
-        lv.outX[q] = outX ? -1 : 0, lv.outY[q] = outY ? -1 : 0;
-        if (rX > 1.f) lv.filteredX[lv.nFilteredX++] = q;
-        if (rY > 1.f) lv.filteredY[lv.nFilteredY++] = q;
-        prefetchRows(base, n, ux, uy, rX, rY);
+        const float* rowx = base + size_t(uint16_t(rowX[n])) * kRowFloats;
+        const float* rowy = base + size_t(uint16_t(rowY[n])) * kRowFloats;
+        const float px = outX ? 0.f : sampleLinear(rowx, kRes, ux), py = outY ? 0.f : sampleLinear(rowy, kRes, uy);
+        const float pxF = rX > 1.f ? textureGradFiltered(rowx, ux, rX) : px;
+        const float pyF = rY > 1.f ? textureGradFiltered(rowy, uy, rY) : py;
+        sf += W * (detMinv * pxF * pyF);
+        su += W * (detMinv * px * py);
     }
 #endif
-}
-
-// Pass 2's MIP-0 lookups (sampleLinear on [0, 1), the same float operations) of every live cell, kLanes at a time:
-// the texel indices and weights in SSE2, the texels gathered by scalar loads with no branch on the data. An axis that
-// reads only zeros (out) and a converged cell read texel 0 of the table instead (cached) and are masked to +0.
-inline void GlintCellSet::lookupMip0(const float* base, LiveCells& lv) const {
-    const int padded = (lv.count + kLanes - 1) / kLanes * kLanes;
-    for (int q = lv.count; q < padded; ++q) {  // dead lanes
-        lv.cell[q] = lv.cell[0];
-        lv.ux[q] = lv.uy[q] = 0.f;
-        lv.outX[q] = lv.outY[q] = -1;
-    }
-#if defined(__SSE2__)
-    const __m128 vres = _mm_set1_ps(float(kRes)), vhalf = _mm_set1_ps(0.5f), vone = _mm_set1_ps(1.f);
-    const __m128i vlast = _mm_set1_epi32(kRes - 1), izero = _mm_setzero_si128(), ione = _mm_set1_epi32(1);
-    // The lanes' inputs were just written one float at a time (pass 1's compaction), so they are gathered with
-    // scalar loads (_mm_setr): a 16-byte load of four recent 4-byte stores would stall on store forwarding.
-    const auto lookup = [&](const float* u, const int32_t* out, const __m128i row, const __m128i conv, float* result,
-                            float* filteredResult) {
-        const __m128 t = _mm_sub_ps(_mm_mul_ps(_mm_setr_ps(u[0], u[1], u[2], u[3]), vres), vhalf);
-        __m128i i0 = _mm_cvttps_epi32(t);  // floor(t): truncation corrected where it rounded up
-        i0 = _mm_add_epi32(i0, _mm_castps_si128(_mm_cmplt_ps(t, _mm_cvtepi32_ps(i0))));
-        const __m128 f = _mm_sub_ps(t, _mm_cvtepi32_ps(i0));
-        const __m128i a = _mm_and_si128(i0, _mm_cmpgt_epi32(i0, izero));  // max(i0, 0)
-        __m128i b = _mm_add_epi32(i0, ione);                               // min(i0 + 1, R - 1)
-        const __m128i bBig = _mm_cmpgt_epi32(b, vlast);
-        b = _mm_or_si128(_mm_andnot_si128(bBig, b), _mm_and_si128(bBig, vlast));
-        const __m128i skip = _mm_or_si128(_mm_setr_epi32(out[0], out[1], out[2], out[3]), conv);
-        alignas(16) int32_t ia[kLanes], ib[kLanes];
-        _mm_store_si128(reinterpret_cast<__m128i*>(ia), _mm_andnot_si128(skip, _mm_add_epi32(row, a)));
-        _mm_store_si128(reinterpret_cast<__m128i*>(ib), _mm_andnot_si128(skip, _mm_add_epi32(row, b)));
-        const __m128 ta = _mm_setr_ps(base[ia[0]], base[ia[1]], base[ia[2]], base[ia[3]]);
-        const __m128 tb = _mm_setr_ps(base[ib[0]], base[ib[1]], base[ib[2]], base[ib[3]]);
-        // (1 - f) tex[a] + f tex[b], as sampleLinear
-        const __m128 v = _mm_add_ps(_mm_mul_ps(_mm_sub_ps(vone, f), ta), _mm_mul_ps(f, tb));
-        const __m128 masked = _mm_andnot_ps(_mm_castsi128_ps(skip), v);
-        _mm_store_ps(result, masked);
-        _mm_store_ps(filteredResult, masked);
-    };
-    for (int q = 0; q < padded; q += kLanes) {
-        const int* n = lv.cell + q;
-        const __m128i rx = _mm_setr_epi32(rowX[n[0]], rowX[n[1]], rowX[n[2]], rowX[n[3]]);
-        const __m128i ry = _mm_setr_epi32(rowY[n[0]], rowY[n[1]], rowY[n[2]], rowY[n[3]]);
-        const __m128i conv = _mm_cmpeq_epi32(rx, _mm_set1_epi32(kConverged));
-        // k N + i < 2^15: the int16 rows are non-negative except kConverged, which the lookups mask
-        const __m128i vstride = _mm_set1_epi32(kRowFloats);
-        const auto mul = [](__m128i a, __m128i b) {  // 32-bit products of small non-negative values (SSE2)
-            const __m128i even = _mm_mul_epu32(a, b), odd = _mm_mul_epu32(_mm_srli_epi64(a, 32), _mm_srli_epi64(b, 32));
-            return _mm_unpacklo_epi32(_mm_shuffle_epi32(even, _MM_SHUFFLE(0, 0, 2, 0)),
-                                      _mm_shuffle_epi32(odd, _MM_SHUFFLE(0, 0, 2, 0)));
-        };
-        lookup(lv.ux + q, lv.outX + q, mul(_mm_andnot_si128(conv, rx), vstride), conv, lv.px + q, lv.pxF + q);
-        lookup(lv.uy + q, lv.outY + q, mul(_mm_andnot_si128(conv, ry), vstride), conv, lv.py + q, lv.pyF + q);
-    }
-#else
-    for (int q = 0; q < padded; ++q) {
-        const int n = lv.cell[q];
-        const bool c = rowX[n] == kConverged;
-        const float* rx = base + size_t(uint16_t(rowX[n])) * kRowFloats;
-        const float* ry = base + size_t(uint16_t(rowY[n])) * kRowFloats;
-        lv.px[q] = lv.pxF[q] = c || lv.outX[q] ? 0.f : sampleLinear(rx, kRes, lv.ux[q]);
-        lv.py[q] = lv.pyF[q] = c || lv.outY[q] ? 0.f : sampleLinear(ry, kRes, lv.uy[q]);
-    }
-#endif
-}
-
-// Pass 2's GGAA-filtered lookups (textureGradFiltered, the same float operations) of the cells in list (an axis
-// whose kernel exceeds a texel, rho > 1), kLanes at a time: log2 rho per lane from the library (its bits decide the
-// MIP blend), then the two MIPs' texel pairs and weights in SSE2 and the texels gathered by scalar loads. MIP m has
-// 2^(6 - m) texels at offset 128 - 2^(7 - m); a lane with MIP 6 alone (blend weight 0) reads MIP 6 twice and keeps
-// the first value, as textureGradFiltered returns v0 without reading MIP 7.
-inline void GlintCellSet::lookupFiltered(const float* base, const int16_t* rows, const int* cell, const int* list,
-                                         int count, const float* u, const float* rho, float* result) {
-#if defined(__SSE2__)
-    const __m128 vhalf = _mm_set1_ps(0.5f), vone = _mm_set1_ps(1.f), vzero = _mm_setzero_ps();
-    const __m128 vlastMip = _mm_set1_ps(float(kMips - 1));
-    const __m128i izero = _mm_setzero_si128(), ione = _mm_set1_epi32(1), i128 = _mm_set1_epi32(2 * kRes);
-    for (int f = 0; f < count; f += kLanes) {
-        alignas(16) float lu[kLanes], lmu[kLanes];
-        alignas(16) int32_t lrow[kLanes];
-        int q[kLanes];
-        for (int k = 0; k < kLanes; ++k) {
-            q[k] = list[f + k < count ? f + k : f];
-            lu[k] = u[q[k]];
-            lmu[k] = std::log2(rho[q[k]]);
-            lrow[k] = int32_t(uint16_t(rows[cell[q[k]]])) * kRowFloats;
-        }
-        // textureGradLodOf: mu = min(log2 rho, L_mip), m0 = floor(mu) (mu > 0), weight of m0 + 1 = mu - m0 below MIP 6
-        const __m128 mu = _mm_min_ps(_mm_load_ps(lmu), vlastMip);
-        const __m128i m0 = _mm_cvttps_epi32(mu);
-        const __m128 m0f = _mm_cvtepi32_ps(m0);
-        const __m128 below = _mm_cmplt_ps(m0f, vlastMip);
-        const __m128 bf = _mm_and_ps(below, _mm_sub_ps(mu, m0f));
-        // 2^(6 - m0) as a float from its exponent; the next MIP has half as many texels (MIP 6 lanes: read MIP 6 again)
-        const __m128i n0i = _mm_cvttps_epi32(_mm_castsi128_ps(_mm_slli_epi32(_mm_sub_epi32(_mm_set1_epi32(127 + kMips - 1), m0), 23)));
-        const __m128i n1i = _mm_or_si128(_mm_andnot_si128(_mm_castps_si128(below), n0i),
-                                         _mm_and_si128(_mm_castps_si128(below), _mm_srli_epi32(n0i, 1)));
-        const __m128 vu = _mm_load_ps(lu);
-        const __m128i row = _mm_load_si128(reinterpret_cast<const __m128i*>(lrow));
-        // sampleLinear(row + mipOffset(m), n, u) for u in [0, 1): texels max(i0, 0), min(i0 + 1, n - 1)
-        const auto linear = [&](__m128i n) {
-            const __m128 t = _mm_sub_ps(_mm_mul_ps(vu, _mm_cvtepi32_ps(n)), vhalf);
-            __m128i i0 = _mm_cvttps_epi32(t);
-            i0 = _mm_add_epi32(i0, _mm_castps_si128(_mm_cmplt_ps(t, _mm_cvtepi32_ps(i0))));
-            const __m128 w = _mm_sub_ps(t, _mm_cvtepi32_ps(i0));
-            const __m128i a = _mm_and_si128(i0, _mm_cmpgt_epi32(i0, izero));
-            __m128i b = _mm_add_epi32(i0, ione);
-            const __m128i last = _mm_sub_epi32(n, ione);
-            const __m128i bBig = _mm_cmpgt_epi32(b, last);
-            b = _mm_or_si128(_mm_andnot_si128(bBig, b), _mm_and_si128(bBig, last));
-            const __m128i offset = _mm_add_epi32(row, _mm_sub_epi32(i128, _mm_add_epi32(n, n)));  // mipOffset
-            alignas(16) int32_t ia[kLanes], ib[kLanes];
-            _mm_store_si128(reinterpret_cast<__m128i*>(ia), _mm_add_epi32(offset, a));
-            _mm_store_si128(reinterpret_cast<__m128i*>(ib), _mm_add_epi32(offset, b));
-            const __m128 ta = _mm_setr_ps(base[ia[0]], base[ia[1]], base[ia[2]], base[ia[3]]);
-            const __m128 tb = _mm_setr_ps(base[ib[0]], base[ib[1]], base[ib[2]], base[ib[3]]);
-            return _mm_add_ps(_mm_mul_ps(_mm_sub_ps(vone, w), ta), _mm_mul_ps(w, tb));
-        };
-        const __m128 v0 = linear(n0i), v1 = linear(n1i);
-        const __m128 mixed = _mm_add_ps(_mm_mul_ps(_mm_sub_ps(vone, bf), v0), _mm_mul_ps(bf, v1));
-        const __m128 useMix = _mm_cmpgt_ps(bf, vzero);  // !(f > 0): v0 alone
-        alignas(16) float out[kLanes];
-        _mm_store_ps(out, _mm_or_ps(_mm_and_ps(useMix, mixed), _mm_andnot_ps(useMix, v0)));
-        for (int k = 0; k < kLanes && f + k < count; ++k) result[q[k]] = out[k];
-    }
-#else
-    for (int f = 0; f < count; ++f) {
-        const int q = list[f];
-        result[q] = textureGradFiltered(base + size_t(uint16_t(rows[cell[q]])) * kRowFloats, u[q], rho[q]);
-    }
-#endif
+    sumF = sf;
+    sumU = su;
 }
 
 // Splits a uniform u in [0,1) at 1/2 into a sign and a fresh uniform in [0,1).
