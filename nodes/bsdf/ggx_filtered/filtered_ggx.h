@@ -378,7 +378,6 @@ struct FloatProjectedApprox {
         if (pointLight && !(lightDistance < 1e12f)) return false;
         const float t = pointLight ? lightDistance : 1.f, pw = pointLight ? 1.f : 0.f;
         const float scale = twoSigma2 / (l * l * l * t * t);  // 2σ² / (l³ t²)
-        float fa, fc = c, fd;                                  // Ā (TK21 Eq. 9)
         // Both derivatives at once, lanes [u x, u y, v x, v y]: P̂ = l t P.
         const __m128 hx = _mm_set1_ps(H.x), hy = _mm_set1_ps(H.y), hz = _mm_set1_ps(H.z), tv = _mm_set1_ps(t);
         const __m128 dpx = _mm_loadu_ps(lanesDpX), dpy = _mm_loadu_ps(lanesDpY), dpz = _mm_loadu_ps(lanesDpZ);
@@ -398,45 +397,50 @@ struct FloatProjectedApprox {
         const __m128 P = _mm_sub_ps(
             _mm_mul_ps(_mm_set1_ps(l), _mm_sub_ps(_mm_mul_ps(tv, _mm_sub_ps(_mm_loadu_ps(lanesDwo), _mm_mul_ps(hz, _mm_loadu_ps(lanesDn)))), proj)),
             _mm_mul_ps(_mm_setr_ps(H.x, H.y, H.x, H.y), tHdH));
+        // Ā as lanes [ā_xx, ā_yy, ·, ·] plus ā_xy, kept in registers: every lane below is the same sequence of float
+        // operations as the scalar form, only without the moves between scalar and vector registers on the way from
+        // the filter to the division (that chain is the evaluation's latency).
+        __m128 F;
+        float fc = c;
         if (fullKernel) {
             const __m128 P2 = _mm_mul_ps(P, P);
             const __m128 diag = _mm_add_ps(P2, _mm_movehl_ps(P2, P2));  // [Σ P_x², Σ P_y², ...]
             const __m128 cross = _mm_mul_ps(P, _mm_shuffle_ps(P, P, _MM_SHUFFLE(2, 3, 0, 1)));
-            fa = a + scale * _mm_cvtss_f32(diag);
-            fd = d + scale * _mm_cvtss_f32(_mm_shuffle_ps(diag, diag, _MM_SHUFFLE(1, 1, 1, 1)));
+            F = _mm_add_ps(_mm_setr_ps(a, d, a, d), _mm_mul_ps(_mm_set1_ps(scale), diag));
             fc = c + scale * (_mm_cvtss_f32(cross) + _mm_cvtss_f32(_mm_movehl_ps(cross, cross)));
         } else {  // Listing 3: min(2σ² fwidth², κ) per axis, saturated
             const __m128 absP = _mm_andnot_ps(_mm_set1_ps(-0.f), P);
             const __m128 w = _mm_add_ps(absP, _mm_movehl_ps(absP, absP));  // [fwidth x, fwidth y, ...] · l t
-            const __m128 f = _mm_min_ps(_mm_add_ps(_mm_setr_ps(a, d, a, d), _mm_min_ps(_mm_mul_ps(_mm_set1_ps(scale), _mm_mul_ps(w, w)),
-                                                                                      _mm_set1_ps(kappa))),
-                                        _mm_set1_ps(1.f));
-            fa = _mm_cvtss_f32(f);
-            fd = _mm_cvtss_f32(_mm_shuffle_ps(f, f, _MM_SHUFFLE(1, 1, 1, 1)));
+            F = _mm_min_ps(_mm_add_ps(_mm_setr_ps(a, d, a, d), _mm_min_ps(_mm_mul_ps(_mm_set1_ps(scale), _mm_mul_ps(w, w)),
+                                                                         _mm_set1_ps(kappa))),
+                           _mm_set1_ps(1.f));
         }
+        const __m128 FA = _mm_shuffle_ps(F, F, _MM_SHUFFLE(0, 0, 0, 0)), FD = _mm_shuffle_ps(F, F, _MM_SHUFFLE(1, 1, 1, 1));
+        const float fa = _mm_cvtss_f32(F), fd = _mm_cvtss_f32(FD);
         const float ad = fa * fd, det = ad - fc * fc;
         if (ad > kMaxConditionFloat * det) return false;
         const float dc = std::max(det, tau);
-        // Lanes [d, R(o)², R(i)², R_s(o)²] → one square root.
-        const __m128 wx = _mm_setr_ps(0.f, wo.x, wi.x, wo.x), wy = _mm_setr_ps(0.f, wo.y, wi.y, wo.y);
-        const __m128 wz = _mm_setr_ps(0.f, wo.z, wi.z, wo.z);
-        const __m128 quad = _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_setr_ps(0.f, fa, fa, sa), _mm_mul_ps(wx, wx)),
-                                                  _mm_mul_ps(_mm_setr_ps(0.f, 2.f * fc, 2.f * fc, 2.f * sc), _mm_mul_ps(wx, wy))),
-                                       _mm_mul_ps(_mm_setr_ps(0.f, fd, fd, sd), _mm_mul_ps(wy, wy)));
-        const __m128 rad = _mm_move_ss(_mm_add_ps(_mm_max_ps(quad, _mm_setzero_ps()), _mm_mul_ps(wz, wz)), _mm_set_ss(dc));
+        // Lanes [d, R(o)², R(i)², R_s(o)²] → one square root; R_s(o)² does not depend on the filter and is added as a
+        // whole (0 + x = x: the same bits as a lane of its own).
+        const float rs2 = std::max(sa * (wo.x * wo.x) + (2.f * sc) * (wo.x * wo.y) + sd * (wo.y * wo.y), 0.f) + wo.z * wo.z;
+        const __m128 wx = _mm_setr_ps(0.f, wo.x, wi.x, 0.f), wy = _mm_setr_ps(0.f, wo.y, wi.y, 0.f);
+        const __m128 wz = _mm_setr_ps(0.f, wo.z, wi.z, 0.f);
+        const __m128 quad = _mm_add_ps(_mm_add_ps(_mm_mul_ps(FA, _mm_mul_ps(wx, wx)), _mm_mul_ps(_mm_set1_ps(2.f * fc), _mm_mul_ps(wx, wy))),
+                                       _mm_mul_ps(FD, _mm_mul_ps(wy, wy)));
+        const __m128 rad = _mm_move_ss(_mm_add_ps(_mm_max_ps(quad, _mm_setzero_ps()), _mm_add_ps(_mm_mul_ps(wz, wz), _mm_setr_ps(0.f, 0.f, 0.f, rs2))),
+                                       _mm_set_ss(dc));
         const __m128 r = _mm_sqrt_ps(rad);
-        // [i_z R(o), o_z R(i), R_s(o)] → X, Y
+        // [i_z R(o), o_z R(i), R_s(o)] in lanes 1–3 → [X, Y] = [i_z R(o) + o_z R(i), R_s(o) + o_z] in lanes 0–1
         const __m128 zr = _mm_mul_ps(r, _mm_setr_ps(0.f, wi.z, wo.z, 1.f));
-        const float X = _mm_cvtss_f32(_mm_shuffle_ps(zr, zr, _MM_SHUFFLE(1, 1, 1, 1))) +
-                        _mm_cvtss_f32(_mm_movehl_ps(zr, zr));
-        const float Y = wo.z + _mm_cvtss_f32(_mm_shuffle_ps(zr, zr, _MM_SHUFFLE(3, 3, 3, 3)));
+        const __m128 XY = _mm_add_ps(_mm_shuffle_ps(zr, zr, _MM_SHUFFLE(3, 3, 3, 1)), _mm_unpackhi_ps(zr, _mm_set1_ps(wo.z)));
         // Lanes [E, E_s]
         const float Hz2 = H.z * H.z, l2 = l * l;
-        const __m128 Ev = _mm_add_ps(
-            _mm_add_ps(_mm_mul_ps(_mm_setr_ps(fd, ia, 0.f, 0.f), _mm_set1_ps(H.x * H.x)),
-                       _mm_mul_ps(_mm_setr_ps(-2.f * fc, 2.f * ic, 0.f, 0.f), _mm_set1_ps(H.x * H.y))),
-            _mm_add_ps(_mm_mul_ps(_mm_setr_ps(fa, id, 0.f, 0.f), _mm_set1_ps(H.y * H.y)), _mm_setr_ps(Hz2 * dc, Hz2, 1.f, 1.f)));
-        const __m128 den = _mm_mul_ps(_mm_mul_ps(Ev, Ev), _mm_setr_ps(X, Y, 1.f, 1.f));  // [E² X, E_s² Y]
+        const __m128 c1 = _mm_unpacklo_ps(FD, _mm_set_ss(ia)), c2 = _mm_unpacklo_ps(_mm_set1_ps(-2.f * fc), _mm_set_ss(2.f * ic));
+        const __m128 c3 = _mm_unpacklo_ps(FA, _mm_set_ss(id));
+        const __m128 c4 = _mm_move_ss(_mm_setr_ps(0.f, Hz2, 1.f, 1.f), _mm_set_ss(Hz2 * dc));
+        const __m128 Ev = _mm_add_ps(_mm_add_ps(_mm_mul_ps(c1, _mm_set1_ps(H.x * H.x)), _mm_mul_ps(c2, _mm_set1_ps(H.x * H.y))),
+                                     _mm_add_ps(_mm_mul_ps(c3, _mm_set1_ps(H.y * H.y)), c4));
+        const __m128 den = _mm_mul_ps(_mm_mul_ps(Ev, Ev), XY);  // [E² X, E_s² Y]
         const __m128 inRange = _mm_and_ps(_mm_cmpgt_ps(den, _mm_set1_ps(1e-30f)), _mm_cmplt_ps(den, _mm_set1_ps(1e30f)));
         if ((_mm_movemask_ps(inRange) & 3) != 3) return false;
         const float numF = dc * _mm_cvtss_f32(r) * l2 * wi.z * float(1.0 / (2.0 * kPiD));
@@ -479,7 +483,14 @@ struct LobeSetup {
 // and `none` give Ā independent of wi, so there Ā_s = Ā and sampling is the lobe's exact VNDF.
 class FilteredGgxLobe final : public ltc::GgxPolygonLobe<FilteredGgxLobe> {
 public:
-    FilteredGgxLobe(const LobeSetup& s, const Fresnel& fresnel, const Color3& tint = Color3(1.f))
+    FilteredGgxLobe(const LobeSetup& s, const Fresnel& fresnel, const Color3& tint = Color3(1.f)) : FilteredGgxLobe(s, fresnel, tint, nullptr) {}
+    // The same lobe after setSamplingFromMirror(mirrorWo), prepared once (the node knows wo when it makes the lobe; the
+    // unfiltered preparation that setSamplingFromMirror would replace is a tenth of a filtered frame's extra time).
+    FilteredGgxLobe(const LobeSetup& s, const Fresnel& fresnel, const Color3& tint, const D3& mirrorWo)
+        : FilteredGgxLobe(s, fresnel, tint, &mirrorWo) {}
+
+private:
+    FilteredGgxLobe(const LobeSetup& s, const Fresnel& fresnel, const Color3& tint, const D3* mirrorWo)
         : s_(s), fresnel_(fresnel), tint_(tint) {
         // τ = det of the unfiltered matrix (A.4; det Ā ≥ det A must hold).
         tau_ = std::max(s_.A.det(), 1e-300);
@@ -492,10 +503,13 @@ public:
                 if (s_.quad && s_.nb[k].valid) dn[k] = (s_.nb[k].n - D3(0, 0, 1)) * s_.nb[k].sign;
             fixed_ = filterIsotropic(s_.A, isotropicKernel(f, dn[0], dn[1], s_.params));
         }
-        sampling_ = PreparedGgx(fixed_, tau_);
-        samplingL_ = cholesky(fixed_);
+        const Sym2 S = mirrorWo && halfVector_ && mirrorWo->z > 0.0 ? mirrorFilter(*mirrorWo) : fixed_;
+        sampling_ = PreparedGgx(S, tau_);
+        samplingL_ = cholesky(S);
         prepareFloat();
     }
+
+public:
 
     LobeKind kind() const override { return LobeKind::Specular; }
     using BsdfLobe::sample;
@@ -522,7 +536,8 @@ public:
             float fScale, pdf, woh;
             if (float_.eval(q.wo, q.wi, q.lightDistance, fScale, pdf, woh)) {
                 LobeValue r;
-                r.f = tint_ * fresnel_.eval(woh) * fScale;
+                // Schlick (the node's mode) inline: the same function Fresnel::eval calls, without the call.
+                r.f = tint_ * (fresnel_.mode == Fresnel::Mode::Schlick ? fresnelSchlick(woh, fresnel_.f0) : fresnel_.eval(woh)) * fScale;
                 r.pdf = pdf;
                 return r;
             }
@@ -593,8 +608,7 @@ public:
     // Filtered matrix at the mirror configuration (the sampling matrix; debug output filtered_alpha).
     void setSamplingFromMirror(const D3& wo) {
         if (!halfVector_ || wo.z <= 0.0) return;
-        D3 wi(-wo.x, -wo.y, wo.z);
-        Sym2 s = filtered(wo, wi, 0.0, false);
+        Sym2 s = mirrorFilter(wo);
         sampling_ = PreparedGgx(s, tau_);
         samplingL_ = cholesky(s);
         prepareFloat();
@@ -610,6 +624,8 @@ public:
     }
 
 private:
+    // The filter at the mirror configuration wi = (−wo_x, −wo_y, wo_z) with a directional light (the sampling matrix).
+    Sym2 mirrorFilter(const D3& wo) const { return filtered(wo, D3(-wo.x, -wo.y, wo.z), 0.0, false); }
     // Float copies for FloatProjectedApprox: projected_approx with analytic derivatives only (quad neighbours and the
     // eigenvalue clamp of the full kernel stay in double), unfiltered and sampling matrices whose condition float can
     // carry, and τ ≥ 1e-17 (α ≥ 1e-4 on both axes, the clamp of roughnessMatrix, gives τ ≥ 1e-16), so that d^{3/2}

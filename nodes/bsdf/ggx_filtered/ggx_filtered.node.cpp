@@ -110,8 +110,8 @@ void cpu(EvalContext& c, const Instr& i) {
             nb.t = loc(q.frame.t), nb.b = loc(q.frame.b), nb.n = loc(q.frame.n);
         }
     }
-    auto* lobe = c.arena->make<FilteredGgxLobe>(s, Fresnel::schlick(p.f0));
-    if (sp) lobe->setSamplingFromMirror(loc(sp->wo));
+    auto* lobe = sp ? c.arena->make<FilteredGgxLobe>(s, Fresnel::schlick(p.f0), Color3(1.f), loc(sp->wo))
+                    : c.arena->make<FilteredGgxLobe>(s, Fresnel::schlick(p.f0));
     const Sym2& As = lobe->samplingMatrix();
     set(c, i, kFilteredAlpha, Vec2(float(std::sqrt(As.a)), float(std::sqrt(As.d))));
     emitLobe(c, i, kBsdf, f, p.weight, lobe);
