@@ -178,70 +178,34 @@ RenderOutput renderScene(const Scene& scene, const RenderOptions& options) {
             ray.pixelOffset = off;
             return ray;
         };
-        if (batched) {
-            // Row by row, one sample index at a time across the row: the row's camera rays are one coherent stream
-            // and their hits are shaded per material in one pass; each pixel still adds its samples in index order,
-            // so the sums are those of the pixel-by-pixel loop below.
-            const int rowWidth = tx1 - tx0;
-            const size_t width = static_cast<size_t>(rowWidth);
-            std::vector<Accum> acc(width), blockAcc(width);
-            std::vector<PixelSampler> samplers(width, PixelSampler(0, 0, 0, 0));
-            std::vector<RayDifferential> rays(width);
-            std::vector<CameraVertex> first(width);
-            ScratchArena cameraArena;
-            for (int y = ty0; y < ty1; ++y) {
-                if (options.cancel && options.cancel->load()) {
-                    cancelled = true;
-                    return;  // tile stays partially rendered; counted as not done
-                }
-                std::fill(acc.begin(), acc.end(), Accum{});
-                std::fill(blockAcc.begin(), blockAcc.end(), Accum{});
-                bool firstBlock = true;
-                for (int s = sampleBegin; s < sampleEnd; ++s) {
-                    if (s > sampleBegin && s % block == 0) {
-                        for (int i = 0; i < rowWidth; ++i) {
-                            foldBlock(acc[size_t(i)], blockAcc[size_t(i)], firstBlock, severalBlocks);
-                            blockAcc[size_t(i)] = Accum{};
-                        }
-                        firstBlock = false;
-                    }
-                    if ((s & 31) == 31 && options.cancel && options.cancel->load(std::memory_order_relaxed)) {
-                        cancelled = true;
-                        return;
-                    }
-                    Vec2 uLens;
-                    for (int i = 0; i < rowWidth; ++i) rays[size_t(i)] = cameraSample(tx0 + i, y, s, samplers[size_t(i)], uLens);
-                    cameraArena.reset();
-                    integrator.shadeCameraHits(rays.data(), size_t(rowWidth), cameraArena, first.data());
-                    for (int i = 0; i < rowWidth; ++i) {
-                        SampleValue v = integrator.li(rays[size_t(i)], samplers[size_t(i)], arena, nullptr, &first[size_t(i)]);
-                        ++tileSamples;
-                        if (!finiteSample(v)) {
-                            ++tileInvalid;
-                            continue;
-                        }
-                        blockAcc[size_t(i)].add(v, v.depth, 1);
-                    }
-                }
-                for (int i = 0; i < rowWidth; ++i) {
-                    foldBlock(acc[size_t(i)], blockAcc[size_t(i)], firstBlock, severalBlocks);
-                    writePixel(tx0 + i, y, acc[size_t(i)]);
-                }
-            }
-        }
-        for (int y = ty0; y < (batched ? ty0 : ty1); ++y) {
+        // A tile renders row by row in spans of pixels, one sample index at a time across the span; each pixel adds
+        // its samples in index order, so the sums do not depend on the span's width. Batched: a span is the whole
+        // row, its camera rays are one coherent stream and their hits are shaded per material in one pass
+        // (Integrator::shadeCameraHits). Otherwise a span is one pixel, traced and shaded alone (quad derivatives
+        // need each pixel's partner rays).
+        const int rowWidth = tx1 - tx0;
+        const size_t span = batched ? static_cast<size_t>(rowWidth) : 1;
+        std::vector<Accum> acc(span), blockAcc(span);
+        std::vector<PixelSampler> samplers(span, PixelSampler(0, 0, 0, 0));
+        std::vector<RayDifferential> rays(span);
+        std::vector<CameraVertex> first(batched ? span : 0);
+        ScratchArena cameraArena;
+        for (int y = ty0; y < ty1; ++y) {
             if (options.cancel && options.cancel->load()) {
                 cancelled = true;
                 return;  // tile stays partially rendered; counted as not done
             }
-            for (int x = tx0; x < tx1; ++x) {
-                Accum acc, blockAcc;
+            for (int x0 = tx0; x0 < tx1; x0 += int(span)) {
+                std::fill(acc.begin(), acc.end(), Accum{});
+                std::fill(blockAcc.begin(), blockAcc.end(), Accum{});
                 bool firstBlock = true;
                 for (int s = sampleBegin; s < sampleEnd; ++s) {
                     // Block boundaries are fixed sample indices, whichever samples a process renders.
                     if (s > sampleBegin && s % block == 0) {
-                        foldBlock(acc, blockAcc, firstBlock, severalBlocks);
-                        blockAcc = Accum{};
+                        for (size_t i = 0; i < span; ++i) {
+                            foldBlock(acc[i], blockAcc[i], firstBlock, severalBlocks);
+                            blockAcc[i] = Accum{};
+                        }
                         firstBlock = false;
                     }
                     // Checked every 32 samples, not per row: at high spp one row of a tile is seconds of work, and
@@ -250,30 +214,39 @@ RenderOutput renderScene(const Scene& scene, const RenderOptions& options) {
                         cancelled = true;
                         return;
                     }
-                    PixelSampler sampler(0, 0, 0, 0);
                     Vec2 uLens;
-                    RayDifferential ray = cameraSample(x, y, s, sampler, uLens);
-                    const Vec2 off = ray.pixelOffset;
+                    for (size_t i = 0; i < span; ++i) rays[i] = cameraSample(x0 + int(i), y, s, samplers[i], uLens);
+                    if (batched) {
+                        cameraArena.reset();
+                        integrator.shadeCameraHits(rays.data(), span, cameraArena, first.data());
+                    }
                     QuadRays quad;
                     if (rs.derivatives == DerivativeMode::Quad) {
                         // Partners in the aligned 2×2 quad (absolute pixel coordinates), same sub-pixel offset and lens
-                        // sample: Δ = q(x0 + 1) − q(x0) as dFdxFine (filtered-ggx.md §5.2).
-                        const int xn = x ^ 1, yn = y ^ 1;
+                        // sample: Δ = q(x0 + 1) − q(x0) as dFdxFine (filtered-ggx.md §5.2). The span is one pixel.
+                        const int x = x0, xn = x ^ 1, yn = y ^ 1;
+                        const Vec2 off = rays[0].pixelOffset;
                         quad.ray[0] = camera.generateRay(xn + 0.5f + off.x, y + 0.5f + off.y, uLens);
                         quad.ray[1] = camera.generateRay(x + 0.5f + off.x, yn + 0.5f + off.y, uLens);
                         quad.sign[0] = (x & 1) ? -1.f : 1.f;
                         quad.sign[1] = (y & 1) ? -1.f : 1.f;
                     }
-                    SampleValue v = integrator.li(ray, sampler, arena, rs.derivatives == DerivativeMode::Quad ? &quad : nullptr);
-                    ++tileSamples;
-                    if (!finiteSample(v)) {
-                        ++tileInvalid;
-                        continue;
+                    for (size_t i = 0; i < span; ++i) {
+                        SampleValue v = integrator.li(rays[i], samplers[i], arena,
+                                                      rs.derivatives == DerivativeMode::Quad ? &quad : nullptr,
+                                                      batched ? &first[i] : nullptr);
+                        ++tileSamples;
+                        if (!finiteSample(v)) {
+                            ++tileInvalid;
+                            continue;
+                        }
+                        blockAcc[i].add(v, v.depth, 1);
                     }
-                    blockAcc.add(v, v.depth, 1);
                 }
-                foldBlock(acc, blockAcc, firstBlock, severalBlocks);
-                writePixel(x, y, acc);
+                for (size_t i = 0; i < span; ++i) {
+                    foldBlock(acc[i], blockAcc[i], firstBlock, severalBlocks);
+                    writePixel(x0 + int(i), y, acc[i]);
+                }
             }
         }
         samples += tileSamples;
