@@ -4,23 +4,17 @@
 
 namespace specula {
 
-void* ScratchArena::allocate(size_t size, size_t align) {
-    size_t start = (offset_ + align - 1) & ~(align - 1);
-    if (start + size <= size_) {
-        offset_ = start + size;
-        return buffer_.get() + start;
-    }
+void* ScratchArena::allocateOverflow(size_t size, size_t align) {
     // Rare: a shading point needed more than the arena; keep it alive until reset().
     overflow_.emplace_back(new std::byte[size + align]);
     auto p = reinterpret_cast<uintptr_t>(overflow_.back().get());
     return reinterpret_cast<void*>((p + align - 1) & ~(uintptr_t(align) - 1));
 }
 
-void ScratchArena::reset() {
+void ScratchArena::releaseAll() {
     for (auto it = dtors_.rbegin(); it != dtors_.rend(); ++it) it->fn(it->obj);
     dtors_.clear();
     overflow_.clear();
-    offset_ = 0;
 }
 
 namespace {

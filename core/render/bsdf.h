@@ -152,10 +152,24 @@ public:
             dtors_.push_back({[](void* p) { static_cast<T*>(p)->~T(); }, obj});
         return obj;
     }
-    void* allocate(size_t size, size_t align);
-    void reset();
+    // The bump fast paths are inline (every lobe of every path vertex is allocated here, and the arena is reset at
+    // each vertex); the rare overflow and the destructor calls are not.
+    void* allocate(size_t size, size_t align) {
+        const size_t start = (offset_ + align - 1) & ~(align - 1);
+        if (start + size <= size_) {
+            offset_ = start + size;
+            return buffer_.get() + start;
+        }
+        return allocateOverflow(size, align);
+    }
+    void reset() {
+        if (!dtors_.empty() || !overflow_.empty()) releaseAll();
+        offset_ = 0;
+    }
 
 private:
+    void* allocateOverflow(size_t size, size_t align);
+    void releaseAll();  // runs the destructors (in reverse order of construction), frees the overflow blocks
     struct Dtor {
         void (*fn)(void*);
         void* obj;
