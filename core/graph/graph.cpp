@@ -339,6 +339,8 @@ GraphDesc parseGraph(const json& mat, const std::string& pointer, const ParseOpt
 // ---- compilation ---------------------------------------------------------------------------------
 
 namespace {
+// Registers of a shade() on the stack; larger programs take their registers from the arena (run).
+constexpr size_t kShadeStackRegisters = 256;
 // Whether NodeParams::read can take port k of a node fed by its binding from the shading point itself: a numeric
 // member of the parameter struct, declared with that binding and as wide as it (Instr::boundPorts).
 bool readsBindingDirectly(const NodeSpec& spec, size_t k) {
@@ -479,6 +481,8 @@ Program Program::compile(const GraphDesc& g, const std::vector<std::pair<int, in
     for (auto& r : roots) prog.rootRegs_.push_back(outRegs[r.first][r.second]);
     if (!roots.empty() && g.nodes[roots[0].first].spec->outputs[roots[0].second].type == TypeDesc::Closure)
         prog.outSlot_ = int(prog.tmpl_[prog.rootRegs_[0]]);
+    prog.singleClosureNode_ = prog.code_.size() == 1 && prog.slots_ == 1 && prog.outSlot_ == 0 && prog.prologue_.empty() &&
+                              !prog.readsTemplate_ && prog.tmpl_.size() <= kShadeStackRegisters;
     return prog;
 }
 
@@ -540,7 +544,24 @@ const float* Program::run(const ShadingPoint& sp, ScratchArena& arena, Closure* 
 }
 
 void Program::shade(const ShadingPoint& sp, ScratchArena& arena, Closure* out, Color3* emission) const {
-    constexpr size_t kStackRegs = 256, kStackSlots = 16;
+    constexpr size_t kStackRegs = kShadeStackRegisters, kStackSlots = 16;
+    if (singleClosureNode_ && out) {
+        // What execute does for this program, its loops unrolled: the one closure is 'out', the one node runs.
+        alignas(16) float r[kStackRegs];
+        Closure* cl[1] = {out};
+        Color3 em[1] = {Color3(0.f)};
+        EvalContext ctx;
+        ctx.r = r;
+        ctx.constants = tmpl_.data();
+        ctx.sp = &sp;
+        ctx.arena = &arena;
+        ctx.closures = cl;
+        ctx.emission = em;
+        const Instr& ins = code_.front();
+        ins.fn(ctx, ins);
+        if (emission) *emission = em[0];
+        return;
+    }
     if (tmpl_.size() > kStackRegs || slots_ > kStackSlots) {
         run(sp, arena, out, emission);
         return;
@@ -568,8 +589,22 @@ void Program::shadeBatch(const ShadingPoint* const* sps, size_t n, ScratchArena&
     EvalContext ctx[kMaxBatch];
     for (size_t begin = 0; begin < n; begin += sub) {
         const size_t m = std::min(sub, n - begin);
-        for (size_t k = 0; k < m; ++k)  // execute()'s prologue, point by point
-            ctx[k] = prepare(*sps[begin + k], arena, r + k * regs, cl + k * slots, em + k * slots, out[begin + k], false);
+        if (singleClosureNode_) {
+            // prepare() for this program: the one closure is out[k], nothing to load (see shade).
+            for (size_t k = 0; k < m; ++k) {
+                cl[k] = out[begin + k];
+                em[k] = Color3(0.f);
+                ctx[k].r = r + k * regs;
+                ctx[k].constants = tmpl_.data();
+                ctx[k].sp = sps[begin + k];
+                ctx[k].arena = &arena;
+                ctx[k].closures = cl + k;
+                ctx[k].emission = em + k;
+            }
+        } else {
+            for (size_t k = 0; k < m; ++k)  // execute()'s prologue, point by point
+                ctx[k] = prepare(*sps[begin + k], arena, r + k * regs, cl + k * slots, em + k * slots, out[begin + k], false);
+        }
         for (const Instr& ins : code_) {
             if (ins.batchFn) {
                 ins.batchFn(ctx, m, ins);

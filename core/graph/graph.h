@@ -112,6 +112,10 @@ private:
     // Whether a shade copies the template: false only when every instruction has a parameter struct and every port that
     // varies is a direct binding (a conservative test: ports fed by other nodes also set it; see compile).
     bool readsTemplate_ = false;
+    // The program is one node whose closure is the material's output, with no prologue, no template read and registers
+    // that fit shade()'s stack (a BSDF node with literal inputs, the commonest material): shade and shadeBatch then call
+    // it without the closure pool, prologue and instruction loops (issue 37: bench_graph's per-point set-up).
+    bool singleClosureNode_ = false;
 };
 
 }  // namespace specula::graph
