@@ -341,6 +341,28 @@ GraphDesc parseGraph(const json& mat, const std::string& pointer, const ParseOpt
 namespace {
 // Registers of a shade() on the stack; larger programs take their registers from the arena (run).
 constexpr size_t kShadeStackRegisters = 256;
+
+// Where loadBinding(b) copies its value from: the byte offset of that field of ShadingPoint, or -1 for a binding it
+// computes (NdotV, the pixel footprints, frontFacing). ParamRead::ShadingPointBytes copies the same floats.
+int shadingPointOffset(GeomBinding b) {
+    static const ShadingPoint probe;
+    auto at = [](const void* member) {
+        return int(reinterpret_cast<const char*>(member) - reinterpret_cast<const char*>(&probe));
+    };
+    switch (b) {
+        case GeomBinding::UV: return at(&probe.uv);
+        case GeomBinding::DUVDX: return at(&probe.duvdx);
+        case GeomBinding::DUVDY: return at(&probe.duvdy);
+        case GeomBinding::P: return at(&probe.p);
+        case GeomBinding::N: return at(&probe.n);
+        case GeomBinding::Ng: return at(&probe.ng);
+        case GeomBinding::T: return at(&probe.tangent);  // its xyz
+        case GeomBinding::TSign: return at(&probe.tangent.w);
+        case GeomBinding::DNDX: return at(&probe.dndx);
+        case GeomBinding::DNDY: return at(&probe.dndy);
+        default: return -1;
+    }
+}
 // Whether NodeParams::read can take port k of a node fed by its binding from the shading point itself: a numeric
 // member of the parameter struct, declared with that binding and as wide as it (Instr::boundPorts).
 bool readsBindingDirectly(const NodeSpec& spec, size_t k) {
@@ -502,6 +524,30 @@ void Program::preRead(Instr& ins, const ParamLayout& layout, uint32_t dynamicPor
     ins.constLayout = &layout;
     ins.dynamicPorts = dynamicPorts;
     data_.push_back(std::shared_ptr<const void>(block, block.get()));
+    // The reads of the ports that vary (Instr::reads), in port order.
+    std::vector<ParamRead> reads;
+    for (const ParamField& f : layout.fields) {
+        if (!(dynamicPorts >> f.port & 1)) continue;
+        ParamRead rd{f.offset, ins.in[f.port], f.width, ParamRead::Register, GeomBinding::None};
+        if (ins.boundPorts >> f.port & 1) {
+            const int at = shadingPointOffset(f.binding);
+            if (at >= 0) {
+                rd.from = ParamRead::ShadingPointBytes;
+                rd.source = uint16_t(at);
+            } else {
+                rd.from = ParamRead::Binding;
+                rd.binding = f.binding;
+            }
+        }
+        reads.push_back(rd);
+    }
+    if (!reads.empty()) {
+        std::shared_ptr<ParamRead[]> stored(new ParamRead[reads.size()]);
+        std::copy(reads.begin(), reads.end(), stored.get());
+        ins.reads = stored.get();
+        ins.readCount = uint8_t(reads.size());
+        data_.push_back(std::shared_ptr<const void>(stored, stored.get()));
+    }
 }
 
 // Inlined into execute and shadeBatch: a shade is a few dozen instructions of set-up around the nodes, and a call

@@ -202,7 +202,7 @@ public:
     }
 
     // The typed read of every bound member from the instruction's registers: the program's pre-read block, if it
-    // was built for this struct, and then only the ports that vary per shading point.
+    // was built for this struct, and then only the ports that vary per shading point (Instr::reads).
 #if defined(__GNUC__) && !defined(__clang__)
 #pragma GCC diagnostic push
 // GCC cannot see that a field's width is the width of its member once readParamField is inlined (field widths are
@@ -215,13 +215,19 @@ public:
         char* base = reinterpret_cast<char*>(&p);
         if (i.constLayout == &layout_) {
             std::memcpy(base, i.constParams, sizeof(P));
-            for (uint32_t m = i.dynamicPorts & dynamicCandidates_; m; m &= m - 1) {
-                const int port = __builtin_ctz(m);
-                const ParamField& fd = layout_.fields[fieldOfPort_[port]];
-                if (i.boundPorts >> port & 1)
-                    loadBinding(fd.binding, *c.sp, reinterpret_cast<float*>(base + fd.offset));
-                else
-                    readParamField(c.r, i, fd, base);
+            for (const ParamRead *rd = i.reads, *end = i.reads + i.readCount; rd != end; ++rd) {
+                char* dst = base + rd->offset;
+                if (rd->from == ParamRead::Binding) {
+                    loadBinding(rd->binding, *c.sp, reinterpret_cast<float*>(dst));
+                    continue;
+                }
+                const char* src = rd->from == ParamRead::Register ? reinterpret_cast<const char*>(c.r + rd->source)
+                                                                  : reinterpret_cast<const char*>(c.sp) + rd->source;
+                switch (rd->width) {  // fixed-size copies, as readParamField
+                    case 1: std::memcpy(dst, src, 4); break;
+                    case 2: std::memcpy(dst, src, 8); break;
+                    default: std::memcpy(dst, src, 12); break;
+                }
             }
             return p;
         }
@@ -236,8 +242,6 @@ private:
     void addField(size_t offset, uint8_t width, ParamField::Kind kind) {
         uint8_t port = uint8_t(ports_.size() - 1);
         if (port >= 32) fatal("more than 32 ports");
-        fieldOfPort_[port] = uint8_t(layout_.fields.size());
-        dynamicCandidates_ |= 1u << port;
         layout_.fields.push_back({uint16_t(offset), width, kind, port, GeomBinding::None});
     }
     template <class M>
@@ -253,8 +257,6 @@ private:
     [[noreturn]] static void fatal(const std::string& what);
     std::vector<PortSpec> ports_;
     ParamLayout layout_{sizeof(P), alignof(P), {}};
-    std::array<uint8_t, 32> fieldOfPort_{};  // field index of each bound port
-    uint32_t dynamicCandidates_ = 0;         // ports bound to a member (string ports are read by prepare only)
 };
 
 void nodeParamsFatal(const std::string& what);

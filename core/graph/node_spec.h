@@ -208,6 +208,19 @@ struct ParamLayout {
     size_t size = 0, align = 1;
     std::vector<ParamField> fields;
 };
+// One member of a node's parameter struct that varies per shading point, as Program::compile resolved it: after the
+// pre-read block (Instr::constParams), NodeParams::read copies 'width' floats into the member at 'offset' from register
+// 'source', or from the shading point's bytes at 'source' (a binding that is a field of ShadingPoint), or computes it
+// with loadBinding (NdotV, the pixel footprints, frontFacing). No per-port look-up, bit test or binding switch remains
+// per shade (issue 37: a third of the GGX node's extra instructions in bench_graph).
+struct ParamRead {
+    enum From : uint8_t { Register, ShadingPointBytes, Binding };
+    uint16_t offset;
+    uint16_t source;
+    uint8_t width;
+    From from;
+    GeomBinding binding;
+};
 
 struct NodeSpec {
     std::string id;        // stable, e.g. "bsdf.ggx"
@@ -279,6 +292,10 @@ struct Instr {
     // Of the dynamic ports, those fed by their own geometry binding (PortSpec::binding): NodeParams::read takes them
     // from the shading point itself, so no register (and no prologue load) stands between the two.
     uint32_t boundPorts = 0;
+    // The dynamic ports' reads, in port order (owned by the program; ParamRead): what NodeParams::read does after
+    // copying constParams.
+    const ParamRead* reads = nullptr;
+    uint8_t readCount = 0;
 };
 
 // Per-evaluation state the instruction functions see.
