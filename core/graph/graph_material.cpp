@@ -3,14 +3,12 @@
 
 namespace specula {
 
-void GraphMaterial::shade(const ShadingPoint& sp, ScratchArena& arena, Closure& out, Color3* emission) const {
-    out.clear();
+void GraphMaterial::build(const ShadingPoint& sp, ScratchArena& arena, Closure& out, Color3* emission) const {
     program_.shade(sp, arena, &out, emission);
 }
 
-void GraphMaterial::shadeBatch(const ShadingPoint* const* sps, size_t n, ScratchArena& arena, Closure* const* out,
+void GraphMaterial::buildBatch(const ShadingPoint* const* sps, size_t n, ScratchArena& arena, Closure* const* out,
                                Color3* emission) const {
-    for (size_t k = 0; k < n; ++k) out[k]->clear();
     program_.shadeBatch(sps, n, arena, out, emission);
 }
 

@@ -29,13 +29,15 @@ class GraphMaterial final : public Material {
 public:
     GraphMaterial(graph::GraphDesc desc, graph::Program program)
         : desc_(std::move(desc)), program_(std::move(program)) {}
-    void shade(const ShadingPoint& sp, ScratchArena& arena, Closure& out, Color3* emission = nullptr) const override;
-    void shadeBatch(const ShadingPoint* const* sps, size_t n, ScratchArena& arena, Closure* const* out,
-                    Color3* emission = nullptr) const override;
     bool isEmissive() const override { return program_.emissive(); }
     bool needsDerivatives() const override { return program_.needsDerivatives(); }
     const graph::GraphDesc& desc() const { return desc_; }
     const graph::Program& program() const { return program_; }
+
+protected:
+    void build(const ShadingPoint& sp, ScratchArena& arena, Closure& out, Color3* emission) const override;
+    void buildBatch(const ShadingPoint* const* sps, size_t n, ScratchArena& arena, Closure* const* out,
+                    Color3* emission) const override;
 
 private:
     graph::GraphDesc desc_;

@@ -167,7 +167,6 @@ void Integrator::shadeCameraHits(const RayDifferential* rays, size_t n, ScratchA
             if (scene_.shapes[hit.shape].areaLight >= 0) continue;  // lights do not scatter: li answers alone
             v.sp.depth = 0;
             v.shaded = true;
-            v.closure.clear();  // as li clears its closure before shading: a Material may add to what it is given
             materialOf[shadedCount] = uint32_t(scene_.shapes[hit.shape].material);
             vertexOf[shadedCount] = begin + k;
             closures[shadedCount] = &v.closure;
@@ -229,8 +228,9 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
     float prevHitT = 0.f;
     uint32_t prevPrim = 0;
 
-    // One closure for the whole path, cleared at each vertex: constructing it (8 lobe slots with their frames) at every
-    // vertex was a measurable part of a vertex's cost (issue 15). Its lobes live in the arena, reset with the vertex.
+    // One closure for the whole path, replaced at each vertex by Material::shade: constructing it (8 lobe slots with
+    // their frames) at every vertex was a measurable part of a vertex's cost (issue 15). Its lobes live in the arena,
+    // reset with the vertex.
     Closure pathClosure;
     for (int depth = 0;; ++depth) {
         sampler.setDimension(firstBounceDim + uint32_t(depth) * dimsPerBounce_);
@@ -275,7 +275,6 @@ SampleValue Integrator::li(const RayDifferential& cameraRay, PixelSampler& sampl
         if (preShaded) {
             Le = first->Le;
         } else {
-            pathClosure.clear();
             // One shading pass gives the closure and the emission; the shading point stays const while it runs.
             material.shade(sp, arena, pathClosure, material.isEmissive() ? &Le : nullptr);
         }

@@ -12,15 +12,19 @@ namespace specula {
 class Material {
 public:
     virtual ~Material() = default;
-    // Builds the closure at sp (lobes allocated in arena, each with its own frame) and, if 'emission' is given,
-    // the radiance emitted towards sp.wo, in the same pass.
-    virtual void shade(const ShadingPoint& sp, ScratchArena& arena, Closure& out, Color3* emission = nullptr) const = 0;
+    // The closure at sp (lobes allocated in arena, each with its own frame) and, if 'emission' is given, the radiance
+    // emitted towards sp.wo, in the same pass. 'out' is replaced: it is cleared here, the one place that does it, so
+    // neither a caller nor a material repeats the rule (a material only adds lobes, in build).
+    void shade(const ShadingPoint& sp, ScratchArena& arena, Closure& out, Color3* emission = nullptr) const {
+        out.clear();
+        build(sp, arena, out, emission);
+    }
     // shade() of n points at once (the renderer's batched camera hits, issue 37): out[k] and, if given, emission[k]
-    // for *sps[k], exactly as n calls of shade() give them; all lobes in 'arena'. A material that can amortise its
-    // per-shade work over the batch (GraphMaterial: one interpreter pass per batch) overrides it.
-    virtual void shadeBatch(const ShadingPoint* const* sps, size_t n, ScratchArena& arena, Closure* const* out,
-                            Color3* emission = nullptr) const {
-        for (size_t k = 0; k < n; ++k) shade(*sps[k], arena, *out[k], emission ? &emission[k] : nullptr);
+    // for *sps[k], exactly as n calls of shade() give them; all lobes in 'arena'.
+    void shadeBatch(const ShadingPoint* const* sps, size_t n, ScratchArena& arena, Closure* const* out,
+                    Color3* emission = nullptr) const {
+        for (size_t k = 0; k < n; ++k) out[k]->clear();
+        buildBatch(sps, n, arena, out, emission);
     }
     virtual bool isEmissive() const { return false; }
     // Whether shading reads the screen-space differentials (dp/dx, duv/dx, dn/dx, dwo/dx, the quad partners) or the
@@ -29,6 +33,16 @@ public:
     virtual bool needsDerivatives() const { return true; }
     const std::string& name() const { return name_; }
     void setName(std::string n) { name_ = std::move(n); }
+
+protected:
+    // Adds the lobes of sp to the empty closure 'out' (and writes *emission if given): what shade() does after clearing.
+    virtual void build(const ShadingPoint& sp, ScratchArena& arena, Closure& out, Color3* emission) const = 0;
+    // build() of n points into n empty closures. A material that can amortise its per-shade work over the batch
+    // (GraphMaterial: one interpreter pass per batch) overrides it.
+    virtual void buildBatch(const ShadingPoint* const* sps, size_t n, ScratchArena& arena, Closure* const* out,
+                            Color3* emission) const {
+        for (size_t k = 0; k < n; ++k) build(*sps[k], arena, *out[k], emission ? &emission[k] : nullptr);
+    }
 
 private:
     std::string name_;

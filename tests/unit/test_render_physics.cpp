@@ -457,7 +457,7 @@ private:
 
 class AnalyticLambertMaterial final : public Material {
 public:
-    void shade(const ShadingPoint& sp, ScratchArena& arena, Closure& out, Color3* emission) const override {
+    void build(const ShadingPoint& sp, ScratchArena& arena, Closure& out, Color3* emission) const override {
         out.add(Color3(1.f), arena.make<AnalyticLambertLobe>(Color3(0.5f)), sp.frame);
     }
 };
@@ -480,14 +480,14 @@ private:
 // Analytic Lambert plus a sampled GGX lobe (no closed form): integratePolygon handles only the diffuse lobe.
 class AnalyticLambertPlusGgxMaterial final : public Material {
 public:
-    void shade(const ShadingPoint& sp, ScratchArena& arena, Closure& out, Color3* emission) const override {
+    void build(const ShadingPoint& sp, ScratchArena& arena, Closure& out, Color3* emission) const override {
         out.add(Color3(1.f), arena.make<AnalyticLambertLobe>(Color3(0.5f)), sp.frame);
         out.add(Color3(1.f), arena.make<SampledOnlyGgxLobe>(0.3f, Fresnel::schlick(Color3(0.5f))), sp.frame);
     }
 };
 class LambertPlusGgxMaterial final : public Material {
 public:
-    void shade(const ShadingPoint& sp, ScratchArena& arena, Closure& out, Color3* emission) const override {
+    void build(const ShadingPoint& sp, ScratchArena& arena, Closure& out, Color3* emission) const override {
         out.add(Color3(1.f), arena.make<LambertLobe>(Color3(0.5f)), sp.frame);
         out.add(Color3(1.f), arena.make<GgxLobe>(0.3f, 0.3f, Fresnel::schlick(Color3(0.5f))), sp.frame);
     }
@@ -627,7 +627,7 @@ namespace {
 class FootprintProbe final : public Material {
 public:
     mutable std::atomic<int> secondary{0}, withFootprint{0};
-    void shade(const ShadingPoint& sp, ScratchArena& arena, Closure& out, Color3* emission) const override {
+    void build(const ShadingPoint& sp, ScratchArena& arena, Closure& out, Color3* emission) const override {
         if (sp.depth >= 1) {
             ++secondary;
             if (sp.hasDifferentials && glm::length(sp.duvdx) > 0.f && glm::length(sp.dpdx) > 0.f) ++withFootprint;
@@ -658,7 +658,7 @@ class DerivativeClaim final : public Material {
 public:
     explicit DerivativeClaim(std::shared_ptr<Material> inner) : inner_(std::move(inner)) {}
     mutable std::atomic<int> shaded{0}, withDifferentials{0};
-    void shade(const ShadingPoint& sp, ScratchArena& arena, Closure& out, Color3* emission) const override {
+    void build(const ShadingPoint& sp, ScratchArena& arena, Closure& out, Color3* emission) const override {
         ++shaded;
         if (sp.hasDifferentials) ++withDifferentials;
         inner_->shade(sp, arena, out, emission);
