@@ -71,17 +71,16 @@ struct Fresnel {
         f.kC = k;
         return f;
     }
+    // Inline for the modes a lobe evaluates on its hot path (Schlick, One), so every lobe gets them without a call;
+    // the exact dielectric and conductor terms, long and rarer, are one call to evalExact (fresnel.cpp).
     Color3 eval(float cosThetaD) const {
-        switch (mode) {
-            case Mode::One: return Color3(1.f);
-            case Mode::Schlick: return fresnelSchlick(cosThetaD, f0);
-            case Mode::Dielectric: return Color3(fresnelDielectric(cosThetaD, eta));
-            case Mode::Conductor:
-                return {fresnelConductor(cosThetaD, etaC.x, kC.x), fresnelConductor(cosThetaD, etaC.y, kC.y),
-                        fresnelConductor(cosThetaD, etaC.z, kC.z)};
-        }
-        return Color3(1.f);
+        if (mode == Mode::Schlick) return fresnelSchlick(cosThetaD, f0);
+        if (mode == Mode::One) return Color3(1.f);
+        return evalExact(cosThetaD);
     }
+
+private:
+    Color3 evalExact(float cosThetaD) const;  // Dielectric and Conductor
 };
 
 }  // namespace specula

@@ -536,8 +536,7 @@ public:
             float fScale, pdf, woh;
             if (float_.eval(q.wo, q.wi, q.lightDistance, fScale, pdf, woh)) {
                 LobeValue r;
-                // Schlick (the node's mode) inline: the same function Fresnel::eval calls, without the call.
-                r.f = tint_ * (fresnel_.mode == Fresnel::Mode::Schlick ? fresnelSchlick(woh, fresnel_.f0) : fresnel_.eval(woh)) * fScale;
+                r.f = tint_ * fresnel_.eval(woh) * fScale;
                 r.pdf = pdf;
                 return r;
             }
