@@ -550,6 +550,21 @@ void Program::preRead(Instr& ins, const ParamLayout& layout, uint32_t dynamicPor
     }
 }
 
+namespace {
+// The context a shade's instructions see: registers r (constants: the program's template), closures cl, emission em.
+inline EvalContext evalContext(const ShadingPoint& sp, ScratchArena& arena, float* r, const float* constants,
+                               Closure** cl, Color3* em) {
+    EvalContext ctx;
+    ctx.r = r;
+    ctx.constants = constants;
+    ctx.sp = &sp;
+    ctx.arena = &arena;
+    ctx.closures = cl;
+    ctx.emission = em;
+    return ctx;
+}
+}  // namespace
+
 // Inlined into execute and shadeBatch: a shade is a few dozen instructions of set-up around the nodes, and a call
 // here saved and restored six registers and copied the context out (callgrind, bench_graph: 63 of ~490 instructions).
 __attribute__((always_inline)) inline EvalContext Program::prepare(const ShadingPoint& sp, ScratchArena& arena, float* r, Closure** cl, Color3* em, Closure* out,
@@ -563,14 +578,7 @@ __attribute__((always_inline)) inline EvalContext Program::prepare(const Shading
             cl[s] = new (arena.allocate(sizeof(Closure), alignof(Closure))) Closure();
     }
     for (const Load& l : prologue_) loadBinding(l.binding, sp, r + l.reg);
-    EvalContext ctx;
-    ctx.r = r;
-    ctx.constants = tmpl_.data();
-    ctx.sp = &sp;
-    ctx.arena = &arena;
-    ctx.closures = cl;
-    ctx.emission = em;
-    return ctx;
+    return evalContext(sp, arena, r, tmpl_.data(), cl, em);
 }
 
 __attribute__((always_inline)) inline void Program::execute(const ShadingPoint& sp, ScratchArena& arena, float* r, Closure** cl, Color3* em, Closure* out,
@@ -596,13 +604,7 @@ void Program::shade(const ShadingPoint& sp, ScratchArena& arena, Closure* out, C
         alignas(16) float r[kStackRegs];
         Closure* cl[1] = {out};
         Color3 em[1] = {Color3(0.f)};
-        EvalContext ctx;
-        ctx.r = r;
-        ctx.constants = tmpl_.data();
-        ctx.sp = &sp;
-        ctx.arena = &arena;
-        ctx.closures = cl;
-        ctx.emission = em;
+        EvalContext ctx = evalContext(sp, arena, r, tmpl_.data(), cl, em);
         const Instr& ins = code_.front();
         ins.fn(ctx, ins);
         if (emission) *emission = em[0];
@@ -640,12 +642,7 @@ void Program::shadeBatch(const ShadingPoint* const* sps, size_t n, ScratchArena&
             for (size_t k = 0; k < m; ++k) {
                 cl[k] = out[begin + k];
                 em[k] = Color3(0.f);
-                ctx[k].r = r + k * regs;
-                ctx[k].constants = tmpl_.data();
-                ctx[k].sp = sps[begin + k];
-                ctx[k].arena = &arena;
-                ctx[k].closures = cl + k;
-                ctx[k].emission = em + k;
+                ctx[k] = evalContext(*sps[begin + k], arena, r + k * regs, tmpl_.data(), cl + k, em + k);
             }
         } else {
             for (size_t k = 0; k < m; ++k)  // execute()'s prologue, point by point
