@@ -41,8 +41,10 @@ inline NodeSpec declareNode(const std::string& id, std::string doc) {
 // The batch entry of a node's CPU function (NodeSpec::cpuBatch, Program::shadeBatch): F inlined into one loop over the
 // batch's points, so the interpreter calls the node once per batch and consecutive points' dependent divisions and
 // square roots overlap (issue 37). The same arithmetic per point as F, so images keep their bits. flatten: GCC kept F
-// (the GGX node's 256 instructions) a call per point; inlined, bench_graph's batch of 32 GGX points took 2127-2140 ->
-// 2036-2061 ns (min of 12, against the hand-written loop's 1779-1807 ns).
+// (the GGX node's 256 instructions) a call per point. Its own gain is not measured apart: with the three other graph
+// changes of issue 37's third slice, callgrind counts 882 instead of 938 instructions per point of bench_graph's batch
+// and interleaved rounds gave graph / direct 1.155 instead of 1.228 (medians); harness times are not quoted, since
+// code placement alone moves them by about 10 % (docs/performance.md).
 template <CpuFn F>
 __attribute__((flatten)) void batchOf(EvalContext* ctx, size_t n, const Instr& ins) {
     for (size_t k = 0; k < n; ++k) F(ctx[k], ins);

@@ -16,8 +16,9 @@ namespace specula::graph {
 // Frame of a BSDF node: n normalised, tangent Gram-Schmidt-orthogonalised (Frame::fromNormalTangent);
 // GLSL: spc_frame() in the prelude.
 // n / sqrt(l2) is one four-lane SSE division, and the (0, 0, 1) of a zero (or NaN) normal is selected without a branch:
-// each lane is the same IEEE division as the three scalar ones (the same bits), but three divisions and a branch on
-// the shading point's chain cost bench_graph's graph 6-7 ns a point over the hand-written GGX (issue 37).
+// each lane is the same IEEE division as the three scalar ones (the same bits), where three divisions and a branch sat
+// on the shading point's chain (issue 37). Its time gain is not measured: a harness figure once quoted here compared two
+// builds that both had it, and code placement alone moves bench_graph by about 10 % (docs/performance.md).
 inline Frame bsdfFrame(Vec3 n, Vec3 t) {
     const float l2 = glm::dot(n, n);
 #if defined(__SSE2__)
