@@ -6,14 +6,32 @@
 #include <filesystem>
 #include <map>
 #include <mutex>
+#include <fcntl.h>
 #include <sys/stat.h>
+#include <tuple>
 #include <utility>
 
 namespace specula {
 
 namespace {
 
-using FileId = std::pair<unsigned long long, unsigned long long>;  // (st_dev, st_ino)
+// One incarnation of a file: device and inode, plus the birth time where the file system reports it. An inode
+// number is reused as soon as its file is deleted (on ext4, by the very next file created in the folder), so a
+// scene that an editor replaced by rename leaves its old number free for this command's own temporary output;
+// the birth time tells the two apart. Without one (btime 0), a noted identity counts only while its noted name
+// still resolves to it (see isNotedInput).
+struct FileId {
+    unsigned long long dev = 0, ino = 0;
+    long long btimeSec = 0;
+    unsigned btimeNsec = 0;
+    bool operator<(const FileId& o) const {
+        return std::tie(dev, ino, btimeSec, btimeNsec) < std::tie(o.dev, o.ino, o.btimeSec, o.btimeNsec);
+    }
+    bool operator==(const FileId& o) const {
+        return dev == o.dev && ino == o.ino && btimeSec == o.btimeSec && btimeNsec == o.btimeNsec;
+    }
+    bool hasBirthTime() const { return btimeSec != 0 || btimeNsec != 0; }
+};
 
 struct Registry {
     std::mutex m;
@@ -25,12 +43,29 @@ Registry& registry() {
     return r;
 }
 
-// stat() follows links: a link to an input is that input.
+// statx() follows links: a link to an input is that input.
 bool fileId(const std::string& path, FileId& id) {
-    struct stat st {};
-    if (path.empty() || ::stat(path.c_str(), &st) != 0) return false;
-    id = {static_cast<unsigned long long>(st.st_dev), static_cast<unsigned long long>(st.st_ino)};
+    struct statx st {};
+    if (path.empty() || ::statx(AT_FDCWD, path.c_str(), 0, STATX_INO | STATX_BTIME, &st) != 0) return false;
+    id = FileId{};
+    id.dev = (static_cast<unsigned long long>(st.stx_dev_major) << 32) | st.stx_dev_minor;
+    id.ino = st.stx_ino;
+    if (st.stx_mask & STATX_BTIME) {
+        id.btimeSec = st.stx_btime.tv_sec;
+        id.btimeNsec = st.stx_btime.tv_nsec;
+    }
     return true;
+}
+
+// Whether 'out' is a file the open scope noted and that still exists as read: with a birth time the identity says
+// so; without one, the noted name must still resolve to it, or the inode number may belong to a newer file.
+// Caller holds r.m.
+const std::string* notedAs(const Registry& r, const FileId& out) {
+    auto it = r.files.find(out);
+    if (it == r.files.end()) return nullptr;
+    if (out.hasBirthTime()) return &it->second;
+    FileId now;
+    return fileId(it->second, now) && now == out ? &it->second : nullptr;
 }
 
 }  // namespace
@@ -68,9 +103,8 @@ void refuseOverwritingInputs(const std::string& output, const std::vector<std::s
     }
     Registry& r = registry();
     std::lock_guard<std::mutex> lock(r.m);
-    auto it = r.files.find(out);
-    if (it != r.files.end())
-        throw Error(ErrorCode::Usage, "", option + " '" + output + "' is the input file '" + it->second +
+    if (const std::string* input = notedAs(r, out))
+        throw Error(ErrorCode::Usage, "", option + " '" + output + "' is the input file '" + *input +
                                               "' of this command; write it elsewhere");
 }
 

@@ -129,7 +129,9 @@ def test_reload():
         proc.send_signal(signal.SIGTERM)
         ev, _ = read_event(proc, "closed")
         code = proc.wait(timeout=60)
-        check(ev is not None and code == 0, "reload: SIGTERM closes the window, exit %s" % code)
+        err = proc.stderr.read().strip().splitlines()
+        check(ev is not None and code == 0, "reload: SIGTERM closes the window, exit %s%s" %
+              (code, "" if code == 0 else " (stderr: %s)" % " | ".join(err[-3:])))
     finally:
         if proc.poll() is None:
             proc.kill()

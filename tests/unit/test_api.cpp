@@ -6,6 +6,7 @@
 #include "core/api/specula.h"
 #include "core/graph/node_spec.h"
 #include "core/io_module/io_module.h"
+#include "core/util/input_files.h"
 #include "test_support.h"
 
 #include <gtest/gtest.h>
@@ -16,6 +17,7 @@
 #include <filesystem>
 #include <mutex>
 #include <set>
+#include <sys/stat.h>
 #include <thread>
 
 namespace fs = std::filesystem;
@@ -318,4 +320,47 @@ TEST(Api, VersionAndBsdfDoNotLoadImageIo) {
         s.compileGlsl("gold");
         EXPECT_FALSE(specula::io_module::loaded());
     }
+}
+
+// A file the command read and that was then replaced by rename (an editor's save, `specula view`'s reload) frees its
+// inode number, and ext4 hands that number to the very next file created in the folder: the command's own temporary
+// output. That new file is not an input (the view test failed on it, exit 2); the live input still is, under any name.
+TEST(InputFiles, ARecycledInodeIsNotAnInputButTheLiveInputIs) {
+    using specula::InputFileScope;
+    using specula::noteInputFile;
+    using specula::refuseOverwritingInputs;
+    const fs::path dir = specula::test::tempDir("input_files");
+    auto write = [](const fs::path& p, const char* text) {
+        std::FILE* f = std::fopen(p.c_str(), "wb");
+        ASSERT_NE(f, nullptr) << p;
+        std::fputs(text, f);
+        std::fclose(f);
+    };
+    InputFileScope scope;
+    const fs::path scene = dir / "scene.json", link = dir / "link.json";
+    write(scene, "{}");
+    noteInputFile(scene.string());
+    fs::create_hard_link(scene, link);
+    EXPECT_THROW(refuseOverwritingInputs(link.string(), {}, "output"), Error) << "a second name of the input is the input";
+
+    // Replace the scene by rename (its first inode stays alive under link.json), then free that inode and create
+    // files until one gets its number.
+    struct stat first {};
+    ASSERT_EQ(::stat(scene.c_str(), &first), 0);
+    write(dir / "scene.json.tmp", "{\"version\": 1}");
+    fs::rename(dir / "scene.json.tmp", scene);
+    EXPECT_THROW(refuseOverwritingInputs(link.string(), {}, "output"), Error) << "renamed over, the read file lives on";
+    fs::remove(link);
+    bool reused = false;
+    for (int i = 0; i < 64 && !reused; ++i) {
+        const fs::path out = dir / ("out" + std::to_string(i) + ".exr");
+        write(out, "x");
+        struct stat st {};
+        ASSERT_EQ(::stat(out.c_str(), &st), 0);
+        if (st.st_ino == first.st_ino && st.st_dev == first.st_dev) {
+            reused = true;
+            EXPECT_NO_THROW(refuseOverwritingInputs(out.string(), {}, "output")) << "inode " << st.st_ino << " was recycled";
+        }
+    }
+    if (!reused) GTEST_SKIP() << "this file system did not reuse the inode number within 64 files";
 }
