@@ -432,14 +432,14 @@ namespace {
 
 // A glint torus under one quad light, nothing else (no environment): the specular AOV is the light's glints.
 // 'crop' rows of the 64x36 frame keep CI time low.
-std::string torusScene(int spp, const char* mode, int seed, bool ggaa) {
+std::string torusScene(int spp, const char* mode, int seed, bool ggaa, const char* footprintCentre = "sample") {
     return R"({
         "render": {"width": 32, "height": 18, "spp": )" + std::to_string(spp) + R"(, "integrator": "direct", "seed": )" +
            std::to_string(seed) + R"(, "area_lights": ")" + mode + R"("},
         "camera": {"position": [0, -2.2, 1.3], "look_at": [0, 0, 0.1], "fov": 40},
         "materials": {"glint": {"nodes": {"g": {"type": "bsdf.glint", "inputs": {"sigma_x": 0.2, "sigma_y": 0.2,
             "log_density": 13, "f0": [0.95, 0.64, 0.54], "uv_scale": 4, "quad_lights": "integrated", "ggaa": ")" + std::string(ggaa ? "on" : "off") +
-           R"("}}}, "output": "@g.bsdf"}},
+           R"(", "footprint_centre": ")" + footprintCentre + R"("}}}, "output": "@g.bsdf"}},
         "shapes": [{"type": "torus", "major_radius": 1.0, "minor_radius": 0.4, "material": "glint"}],
         "lights": [{"type": "quad", "position": [0.6, 0.8, 2.2], "look_at": [0, 0, 0], "size": [0.6, 0.4], "power": 30}]})";
 }
@@ -470,11 +470,11 @@ struct RenderComparison {
 };
 
 // The glint torus at 16 spp with analytic ("ltc") and sampled lights against a refSpp sampled reference.
-RenderComparison compareAt16Spp(bool pixelCentres, bool ggaa, int refSpp) {
+RenderComparison compareAt16Spp(bool pixelCentres, bool ggaa, int refSpp, const char* footprintCentre = "sample") {
     double tRef = 0, tLtc = 0, tSampled = 0;
-    const auto ref = specularAov(torusScene(refSpp, "sampled", 1, ggaa), pixelCentres, &tRef);
-    const auto ltc = specularAov(torusScene(16, "ltc", 2, ggaa), pixelCentres, &tLtc);
-    const auto sampled = specularAov(torusScene(16, "sampled", 2, ggaa), pixelCentres, &tSampled);
+    const auto ref = specularAov(torusScene(refSpp, "sampled", 1, ggaa, footprintCentre), pixelCentres, &tRef);
+    const auto ltc = specularAov(torusScene(16, "ltc", 2, ggaa, footprintCentre), pixelCentres, &tLtc);
+    const auto sampled = specularAov(torusScene(16, "sampled", 2, ggaa, footprintCentre), pixelCentres, &tSampled);
     const double eLtc = rmseOf(ltc, ref), eSampled = rmseOf(sampled, ref);
     const double mRef = meanOf(ref), mLtc = meanOf(ltc), mSampled = meanOf(sampled);
     std::printf("pixel centres %d, GGAA %d: specular mean ref %.5f ltc16 %.5f sampled16 %.5f; RMSE ltc16 %.5f "
@@ -503,5 +503,15 @@ TEST(GlintAreaRender, JitteredPixelSamplesKeepTheirCoverageNoise) {
     // CI time and raises the ratio by < 1 %); asserted with a margin.
     const RenderComparison c = compareAt16Spp(false, true, 1024);
     EXPECT_LE(c.ratio, 0.7);
+    EXPECT_LE(std::abs(c.bias), 0.03);
+}
+
+TEST(GlintAreaRender, PixelCentredGlintsKeepTheirThirdOfTheSampledErrorWithJitteredPixels) {
+    // footprint_centre "pixel" (issue 38 item 2): each sample of a pixel shades with the pixel centre's footprint and
+    // frame, so the coverage noise above leaves the glints and the analytic light keeps its advantage with jittered
+    // pixels. Measured ratio 0.252 (0.510 with "sample", the test above), bias +0.12 % against a 1024-spp sampled
+    // reference of the same mode; asserted with a margin.
+    const RenderComparison c = compareAt16Spp(false, true, 1024, "pixel");
+    EXPECT_LE(c.ratio, 0.33);
     EXPECT_LE(std::abs(c.bias), 0.03);
 }

@@ -139,7 +139,9 @@ void spc_bsdf_glint(SpeculaClosureQuery q, SpeculaShadingInputs s, sampler1DArra
                     float log_density, float relative_area, float density_jitter, float max_anisotropy, int ggaa,
                     float kernel_scale, int derivative, int derivatives, int quad_lights, int fresnel, vec3 f0, float ior, vec3 eta, vec3 k,
                     vec3 base_color, vec2 lean_mean, vec3 lean_cov, vec3 normal,
-                    vec3 tangent, vec2 uv, vec2 duvdx, vec2 duvdy, float uv_scale, vec3 dndx, vec3 dndy, out SpeculaClosure bsdf) {
+                    vec3 tangent, vec2 uv, vec2 duvdx, vec2 duvdy, float uv_scale, vec3 dndx, vec3 dndy,
+                    int footprint_centre, out SpeculaClosure bsdf) {
+    // footprint_centre has no effect here: a fragment is at its pixel centre, so "sample" and "pixel" agree.
     bsdf = spc_closure_none();
     if (q.kind != SPC_QUERY_DIRECTION) {  // polygon queries: not in GLSL (the CPU has glint_area.h); the host samples this lobe
         bsdf.partial = true;

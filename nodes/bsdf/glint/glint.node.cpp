@@ -24,6 +24,7 @@ enum class GgaaSwitch : int { On, Off };
 enum class GgaaDerivative : int { ProjectedHalf, HalfSlope };
 enum class GlintQuadLights : int { Sampled, Integrated };
 enum class GlintDerivativeSource : int { Quad, Analytic };
+enum class GlintFootprintCentre : int { Sample, Pixel };
 
 }  // namespace
 }  // namespace specula::nodes
@@ -32,6 +33,7 @@ SPECULA_ENUM(specula::nodes::GgaaSwitch, "SPC_GLINT_GGAA", "on", "off");
 SPECULA_ENUM(specula::nodes::GgaaDerivative, "SPC_GLINT_DERIVATIVE", "projected_half", "half_slope");
 SPECULA_ENUM(specula::nodes::GlintQuadLights, "SPC_GLINT_QUAD_LIGHTS", "sampled", "integrated");
 SPECULA_ENUM(specula::nodes::GlintDerivativeSource, "SPC_GLINT_DERIVATIVES", "quad", "analytic");
+SPECULA_ENUM(specula::nodes::GlintFootprintCentre, "SPC_GLINT_FOOTPRINT_CENTRE", "sample", "pixel");
 
 namespace specula::nodes {
 namespace {
@@ -55,6 +57,7 @@ struct Params {
     Vec2 uv, duvdx, duvdy;
     float uvScale;
     Vec3 dndx, dndy;
+    GlintFootprintCentre footprintCentre;
 };
 
 NodeParams<Params> declare() {
@@ -89,7 +92,12 @@ NodeParams<Params> declare() {
     // Last in the list: ports added later go after the documented ones (the conformance grid and docs keep their order).
     .choice("derivatives", &Params::derivatives, "where the GGAA derivative comes from: quad (2x2 finite differences of "
             "the half vector in each pixel's own frame, dFdxFine on a GPU; C21 §6.1) or analytic (chain rule from the "
-            "dndx/dndy ports, the view and the light)").uniform();
+            "dndx/dndy ports, the view and the light)").uniform()
+    .choice("footprint_centre", &Params::footprintCentre, "where the LOD footprint is centred: sample (each sample's "
+            "uv: the pixel's glints are the footprint convolved with the pixel filter, and which cells a pixel sees "
+            "depends on its samples' positions) or pixel (the pixel centre's uv and normal, from the sample's offset "
+            "and the duvdx/dndx ports: every sample of a pixel counts the same cells around the same half vectors, "
+            "so the sparkle pattern comes from the surface, not the sampler; what a GPU fragment does)").uniform();
     return l;
 }
 const NodeParams<Params> kParams = declare();
@@ -115,14 +123,19 @@ void shadeGlint(EvalContext& c, const Instr& i, bool gpuTwin) {
     p.integrateQuadLights = in.quadLights == GlintQuadLights::Integrated && !gpuTwin;
     p.sigmaX = std::clamp(p.sigmaX, 0.01f, 1.f);
     p.sigmaY = std::clamp(p.sigmaY, 0.01f, 1.f);
-    Frame f = bsdfFrame(in.normal, in.tangent);
     const ShadingPoint* sp = c.sp;
+    // footprint_centre "pixel": the lobe is the pixel centre's, its uv footprint and its frame both moved back by the
+    // sample's offset from the centre (ShadingPoint::pixelOffset; 0 off camera hits and on a GPU, where a fragment is
+    // at its pixel centre) to first order: uv - duv·offset, n - dn·offset. Every sample of a pixel then counts the same
+    // cells around the same half vectors, and only the light's samples and the pixel's coverage differ between seeds.
+    const Vec2 offset = in.footprintCentre == GlintFootprintCentre::Pixel && sp ? sp->pixelOffset : Vec2(0.f);
+    Frame f = bsdfFrame(in.normal - in.dndx * offset.x - in.dndy * offset.y, in.tangent);
     if (leanCombine(p.sigmaX, p.sigmaY, p.rho, in.leanCov)) {
         Vec3 wo = sp ? sp->wo : f.n;
         f = bsdfFrame(leanNormal(f.t, f.b, f.n, in.leanMean, wo), f.t);
     }
     GlintEvalInputs ev;
-    ev.uv = in.uv * in.uvScale;
+    ev.uv = (in.uv - in.duvdx * offset.x - in.duvdy * offset.y) * in.uvScale;
     ev.duvdx = in.duvdx * in.uvScale;
     ev.duvdy = in.duvdy * in.uvScale;
     if (sp) {
