@@ -19,7 +19,7 @@ namespace {
 // number is reused as soon as its file is deleted (on ext4, by the very next file created in the folder), so a
 // scene that an editor replaced by rename leaves its old number free for this command's own temporary output;
 // the birth time tells the two apart. Without one (btime 0), a noted identity counts only while its noted name
-// still resolves to it (see isNotedInput).
+// still resolves to it (see notedAs).
 struct FileId {
     unsigned long long dev = 0, ino = 0;
     long long btimeSec = 0;

@@ -1,5 +1,5 @@
-// The files a command reads, remembered by identity (device, inode, birth time; not by name), so that none of
-// its outputs replaces one of them: `glsl --resources DIR` over its own material or texture, `render -o` over a texture.
+// The files a command reads, by identity (device, inode and birth time, not by name), so that none of its outputs
+// replaces one of them: `glsl --resources DIR` over its own material or texture, `render -o` over a texture.
 // Front ends open an InputFileScope for a command; the library's readers note what they open while one is open, and
 // every writer of libspecula checks its target first (issue 35, docs/reliability.md "Threat model").
 #pragma once

@@ -341,7 +341,8 @@ TEST(InputFiles, ARecycledInodeIsNotAnInputButTheLiveInputIs) {
     write(scene, "{}");
     noteInputFile(scene.string());
     fs::create_hard_link(scene, link);
-    EXPECT_THROW(refuseOverwritingInputs(link.string(), {}, "output"), Error) << "a second name of the input is the input";
+    EXPECT_THROW(refuseOverwritingInputs(link.string(), {}, "output"), Error)
+        << "a second name of the input is the input";
 
     // Replace the scene by rename (its first inode stays alive under link.json), then free that inode and create
     // files until one gets its number.
@@ -359,7 +360,8 @@ TEST(InputFiles, ARecycledInodeIsNotAnInputButTheLiveInputIs) {
         ASSERT_EQ(::stat(out.c_str(), &st), 0);
         if (st.st_ino == first.st_ino && st.st_dev == first.st_dev) {
             reused = true;
-            EXPECT_NO_THROW(refuseOverwritingInputs(out.string(), {}, "output")) << "inode " << st.st_ino << " was recycled";
+            EXPECT_NO_THROW(refuseOverwritingInputs(out.string(), {}, "output"))
+                << "inode " << st.st_ino << " was recycled";
         }
     }
     if (!reused) GTEST_SKIP() << "this file system did not reuse the inode number within 64 files";
