@@ -77,23 +77,22 @@ inline bool wanted(const Instr& i, OutPort<T> o) {
 // (Program::shade) still finds it.
 inline int slotOf(const EvalContext& c, const Instr& i, OutPort<ClosureRef> o) { return int(c.constants[i.out[o.index]]); }
 
+// Copies 'width' floats from src to dst: fixed-size copies for the widths ports have (1, 2 or 3), since a per-float
+// loop was a third of a GGX node's time in bench_graph. Every port read of a parameter struct goes through it.
+inline void copyPortFloats(char* dst, const void* src, int width) {
+    switch (width) {
+        case 1: std::memcpy(dst, src, 4); break;
+        case 2: std::memcpy(dst, src, 8); break;
+        case 3: std::memcpy(dst, src, 12); break;
+        default: std::memcpy(dst, src, 4 * size_t(width)); break;
+    }
+}
+
 // Reads port fd of instruction i from the registers r into the parameter struct at base. Program::compile uses it
 // with the register template to pre-read the constant ports; NodeParams::read with the shade's registers.
 inline void readParamField(const float* r, const Instr& i, const ParamField& fd, char* base) {
     switch (fd.kind) {
-        case ParamField::Floats: {
-            // Fixed-size copies (the widths are 1, 2 or 3): a per-float loop was a third of a GGX node's time in
-            // bench_graph.
-            const float* src = r + i.in[fd.port];
-            char* dst = base + fd.offset;
-            switch (fd.width) {
-                case 1: std::memcpy(dst, src, 4); break;
-                case 2: std::memcpy(dst, src, 8); break;
-                case 3: std::memcpy(dst, src, 12); break;
-                default: std::memcpy(dst, src, 4 * size_t(fd.width)); break;
-            }
-            break;
-        }
+        case ParamField::Floats: copyPortFloats(base + fd.offset, r + i.in[fd.port], fd.width); break;
         case ParamField::Enum: {
             int v = int(i.in[fd.port]);
             std::memcpy(base + fd.offset, &v, sizeof v);
@@ -223,11 +222,7 @@ public:
                 }
                 const char* src = rd->from == ParamRead::Register ? reinterpret_cast<const char*>(c.r + rd->source)
                                                                   : reinterpret_cast<const char*>(c.sp) + rd->source;
-                switch (rd->width) {  // fixed-size copies, as readParamField
-                    case 1: std::memcpy(dst, src, 4); break;
-                    case 2: std::memcpy(dst, src, 8); break;
-                    default: std::memcpy(dst, src, 12); break;
-                }
+                copyPortFloats(dst, src, rd->width);
             }
             return p;
         }
