@@ -146,6 +146,18 @@ float runRasterReferenceShadingPoint(bool ggaa, size_t& i) {
     const Case& k = rasterCases()[i % rasterCases().size()];
     return referenceShadingPoint(k, ggaa, i++);
 }
+// Explicit flakes (issue 38 item 3): the same shading points with flakes 5 footprints wide (explicit flakes only: no
+// cells built) and 1.33 footprints wide (halfway, r = 0.75: the flakes and the counted cells both answer).
+float runFlakeShadingPoint(float footprintInFlakes, size_t& i) {
+    static const Dictionary& d = Dictionary::instance();
+    const Case& k = cases()[i & 4095];
+    GlintParams p = params(true);
+    const Footprint fp = footprint(k.in.duvdx, k.in.duvdy, p.maxAniso);
+    p.flakeSize = std::sqrt(std::sqrt(glm::dot(fp.a1, fp.a1) * glm::dot(fp.a2, fp.a2))) / footprintInFlakes;
+    p.logDensity = flakeLogDensity(p.flakeSize);
+    const GlintLobe lobe(d, p, k.in, Fresnel::one());
+    return shadingPoint(lobe, k, i++);
+}
 float runGgxShadingPoint(size_t& i) {
     static const GgxLobe lobe(0.2263f, 0.2263f, Fresnel::one());
     const Case& k = cases()[i & 4095];
@@ -201,7 +213,7 @@ void summary() {
         benchmark::DoNotOptimize(acc);
         return std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - t0).count() / n;
     };
-    constexpr int kVariants = 11;
+    constexpr int kVariants = 13;
     double best[kVariants];
     std::fill(best, best + kVariants, 1e30);
     for (int r = 0; r < 15; ++r) {
@@ -216,6 +228,8 @@ void summary() {
         best[8] = std::min(best[8], time([](size_t& i) { return runReferenceShadingPoint(true, i); }));
         best[9] = std::min(best[9], time([](size_t& i) { return runRasterShadingPoint(true, i); }));
         best[10] = std::min(best[10], time([](size_t& i) { return runRasterReferenceShadingPoint(true, i); }));
+        best[11] = std::min(best[11], time([](size_t& i) { return runFlakeShadingPoint(0.2f, i); }));
+        best[12] = std::min(best[12], time([](size_t& i) { return runFlakeShadingPoint(0.75f, i); }));
     }
     std::printf("glint summary (ns/eval, min of 15 interleaved rounds): GGX %.1f, glint no GGAA %.1f, glint GGAA %.1f\n",
                 best[0], best[1], best[2]);
@@ -230,6 +244,9 @@ void summary() {
     std::printf("shading point, GGAA, as before issue 11 (per-query pipeline, Beckmann sampling): random %.1f ns "
                 "(lobe faster by %.2fx); raster order %.1f ns vs lobe %.1f ns (faster by %.2fx)\n",
                 best[8], best[8] / best[7], best[10], best[9], best[10] / best[9]);
+    std::printf("shading point with flakes (issue 38 item 3), GGAA, ns: flakes only (footprint 0.2 flake) %.1f "
+                "(%.2fx the glint shading point), halfway (0.75 flake) %.1f (%.2fx)\n",
+                best[11], best[11] / best[7], best[12], best[12] / best[7]);
     const Dictionary& d = Dictionary::instance();
     {
         double visited = 0, dictCells = 0, converged = 0;

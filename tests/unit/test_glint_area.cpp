@@ -515,3 +515,109 @@ TEST(GlintAreaRender, PixelCentredGlintsKeepTheirThirdOfTheSampledErrorWithJitte
     EXPECT_LE(c.ratio, 0.33);
     EXPECT_LE(std::abs(c.bias), 0.03);
 }
+
+// ---- explicit flakes under quad lights (issue 38 item 3) ----------------------------------------------------------
+namespace {
+
+// Flake cases: the random materials and views above with flakes of 0.002 UV (RMS slope 0.02-0.06), at a zero footprint
+// (explicit flakes only) or halfway to the counted cells (footprint 0.75 flake, w_e = 1/2), on a point with a flake,
+// the light around the mirror direction of a slope drawn from that flake's lobe.
+struct FlakeCase {
+    Case c;
+    GlintLobe lobe;
+};
+std::vector<FlakeCase> flakeCases(int count, uint32_t seed, bool halfway) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> U(0.f, 1.f);
+    std::normal_distribution<float> N(0.f, 1.f);
+    std::vector<FlakeCase> out;
+    for (Case c : randomCases(4 * count, seed)) {
+        if (int(out.size()) == count) break;
+        c.p.flakeSize = 0.002f;
+        c.p.flakeRoughness = 0.02f + 0.04f * U(rng);
+        c.p.logDensity = flakeLogDensity(c.p.flakeSize);
+        c.p.integrateQuadLights = true;
+        const float fp = halfway ? 0.75f * c.p.flakeSize : 0.f;
+        c.in.duvdx = Vec2(fp, 0.f), c.in.duvdy = Vec2(0.f, fp);
+        GlintLobe lobe(Dictionary::instance(), c.p, c.in, Fresnel::one());
+        if (lobe.flakes().count == 0) continue;
+        const Vec2 s = lobe.flakes().flakes[0].slope + lobe.flakeSigma() * Vec2(N(rng), N(rng));
+        const Vec3 h = glm::normalize(Vec3(-s.x, -s.y, 1.f));
+        const Vec3 wi = 2.f * glm::dot(c.wo, h) * h - c.wo;
+        if (wi.z < 0.1f || glm::dot(c.wo, h) <= 0.f) continue;
+        const float dist = 1.f + 4.f * U(rng), angle = 0.05f + 0.3f * U(rng);
+        c.quad = makeQuad(wi, dist, 2.f * dist * std::tan(0.5f * angle), 0.8f * (U(rng) - 0.5f));
+        out.push_back({c, lobe});
+    }
+    return out;
+}
+
+}  // namespace
+
+// The flake's share of the polygon integral (flakePolygonIntegral: its Gaussian over the light's half-slope region,
+// the smooth factor at its centroid per piece) against Monte Carlo of the lobe's own point evaluation, explicit flakes
+// only and halfway to the counted cells (whose share is glintPolygonIntegral's).
+TEST(GlintArea, FlakePolygonIntegralMatchesMonteCarloOfThePointEvaluation) {
+    for (bool halfway : {false, true}) {
+        const auto cases = flakeCases(24, halfway ? 41 : 43, halfway);
+        ASSERT_EQ(cases.size(), 24u);
+        double sumA = 0, sumR = 0, sumRel = 0, maxRel = 0;
+        int counted = 0;
+        for (size_t n = 0; n < cases.size(); ++n) {
+            const FlakeCase& f = cases[n];
+            if (halfway) ASSERT_NEAR(f.lobe.flakeWeight(), 0.5f, 1e-6f);
+            const double ref = monteCarlo(f.c.quad, 256, 300 + n, [&](const Vec3& wi) {
+                return f.lobe.evalPdf(LobeQuery{f.c.wo, wi}).f.x;
+            });
+            Color3 ana(0.f);
+            ASSERT_TRUE(f.lobe.integratePolygon(LobeQuery{f.c.wo, f.c.wo}, f.c.quad.v, 4, ana));
+            sumA += ana.x, sumR += ref;
+            if (ref > 1e-3) {
+                const double rel = std::abs(ana.x / ref - 1.0);
+                sumRel += rel, maxRel = std::max(maxRel, rel);
+                ++counted;
+            }
+        }
+        std::printf("flakes under quad lights (%s): %d queries, mean |rel err| %.4f, max %.4f, bias %+.4f\n",
+                    halfway ? "halfway" : "flakes only", counted, sumRel / std::max(counted, 1), maxRel, sumA / sumR - 1);
+        EXPECT_GE(counted, 16);
+        EXPECT_LT(std::abs(sumA / sumR - 1.0), 0.01);
+        EXPECT_LT(sumRel / counted, 0.01);
+        EXPECT_LT(maxRel, 0.03);
+    }
+}
+
+// The shadow-ray directions of a flake lobe follow its integrand: the share of samplePolygon's directions on the left
+// half of the light against integratePolygon's share of that half.
+TEST(GlintArea, FlakeShadowRayDirectionsFollowTheFlakeIntegrand) {
+    const auto cases = flakeCases(20, 47, false);
+    std::mt19937 rng(9);
+    std::uniform_real_distribution<float> U(0.f, 1.f);
+    double sumErr = 0, worst = 0;
+    int counted = 0;
+    for (const FlakeCase& f : cases) {
+        Color3 total(0.f), left(0.f);
+        const Quad half = subQuad(f.c.quad, -1.f, 0.f);
+        f.lobe.integratePolygon(LobeQuery{f.c.wo, f.c.wo}, f.c.quad.v, 4, total);
+        f.lobe.integratePolygon(LobeQuery{f.c.wo, f.c.wo}, half.v, 4, left);
+        if (total.x < 1e-3f) continue;
+        const double share = left.x / total.x;
+        const int N = 1000;
+        int inLeft = 0;
+        for (int k = 0; k < N; ++k) {
+            const float uY = U(rng), uX = U(rng);
+            Vec3 w;
+            if (!f.lobe.samplePolygon(LobeQuery{f.c.wo, f.c.wo}, f.c.quad.v, 4, Vec2(uX, uY), rng(), w)) continue;
+            const Vec3 pt = w * (glm::dot(f.c.quad.centre, f.c.quad.normal) / glm::dot(w, f.c.quad.normal));
+            inLeft += glm::dot(pt - f.c.quad.centre, f.c.quad.e1) < 0.f;
+        }
+        const double err = std::abs(double(inLeft) / N - share);
+        sumErr += err, worst = std::max(worst, err);
+        ++counted;
+    }
+    std::printf("flake shadow rays: left-half share error mean %.4f, max %.4f over %d lights\n", sumErr / counted,
+                worst, counted);
+    EXPECT_GE(counted, 12);
+    EXPECT_LT(sumErr / counted, 0.03);
+    EXPECT_LT(worst, 0.08);
+}

@@ -133,6 +133,62 @@ float spc_glint_level(sampler1DArray dictionary, SpcGlintQuery q, int l, vec2 uv
     return sumW > 0.0 ? sumWP / sumW : 0.0;
 }
 
+// Explicit flakes (glint_flakes.h, same operations): the seed of Voronoi cell (x, y); the cell whose jittered point is
+// nearest to uv (F1 Voronoi of uv / size over the 3 x 3 neighbourhood); the flake of a cell (present with probability
+// relArea, slope m = L_f z with L_f the Cholesky factor of Sigma - sf^2 I, z by Box-Muller); and the footprint's flake
+// density: the box uv + dx s + dy t read at 4 x 4 points (one for a zero footprint), sum of N(hs; m, sf^2 I) / points.
+uint spc_glint_flake_seed(int x, int y) { return uint(x) * 73856093u + uint(y) * 19349663u + 83492791u; }
+ivec2 spc_glint_flake_cell(vec2 uv, float size) {
+    float px = uv.x / size, py = uv.y / size;
+    float fx = floor(px), fy = floor(py);
+    int ix = int(fx), iy = int(fy);
+    float best = 1e30;
+    ivec2 cell = ivec2(ix, iy);
+    for (int dy = -1; dy <= 1; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx) {
+            uint S = spc_glint_flake_seed(ix + dx, iy + dy);
+            float ox = (fx + float(dx)) + spc_glint_hash(92821u * S) - px;
+            float oy = (fy + float(dy)) + spc_glint_hash(68917u * S) - py;
+            float d2 = ox * ox + oy * oy;
+            if (d2 < best) {
+                best = d2;
+                cell = ivec2(ix + dx, iy + dy);
+            }
+        }
+    }
+    return cell;
+}
+bool spc_glint_flake_of_cell(ivec2 cell, float relArea, float sx, float sy, float r, float sf, out vec2 slope) {
+    uint S = spc_glint_flake_seed(cell.x, cell.y);
+    float rr = sqrt(-2.0 * log(spc_glint_hash(104729u * S)));
+    float phi = 2.0 * SPC_PI * spc_glint_hash(1299709u * S);
+    float z1 = rr * cos(phi), z2 = rr * sin(phi);
+    float sf2 = sf * sf;
+    float l00 = sqrt(sx * sx - sf2);
+    float l10 = r * sx * sy / l00;
+    float l11 = sqrt(max(sy * sy - sf2 - l10 * l10, 0.0));
+    slope = vec2(l00 * z1, l10 * z1 + l11 * z2);
+    return spc_glint_hash(7919u * S) <= relArea;
+}
+float spc_glint_flakes_sdf(vec2 uv, vec2 dx, vec2 dy, float size, float relArea, float sx, float sy, float r, float sf,
+                           vec2 hs) {
+    bool point = dx == vec2(0.0) && dy == vec2(0.0);
+    int n = point ? 1 : 4;
+    float sum = 0.0, v = sf * sf;
+    for (int j = 0; j < n; ++j) {
+        for (int i = 0; i < n; ++i) {
+            float ox = point ? 0.0 : -0.375 + 0.25 * float(i), oy = point ? 0.0 : -0.375 + 0.25 * float(j);
+            vec2 p = vec2(uv.x + dx.x * ox + dy.x * oy, uv.y + dx.y * ox + dy.y * oy);
+            vec2 m;
+            if (spc_glint_flake_of_cell(spc_glint_flake_cell(p, size), relArea, sx, sy, r, sf, m)) {
+                vec2 d = hs - m;
+                sum += exp(-0.5 * (d.x * d.x + d.y * d.y) / v) / (2.0 * SPC_PI * v);
+            }
+        }
+    }
+    return sum / float(n * n);
+}
+
 vec3 spc_glint_frame_rotation(vec2 a, vec3 w) { return vec3(-a.x * w.z, -a.y * w.z, a.x * w.x + a.y * w.y); }
 
 void spc_bsdf_glint(SpeculaClosureQuery q, SpeculaShadingInputs s, sampler1DArray dictionary, vec3 weight, float sigma_x, float sigma_y, float rho,
@@ -140,7 +196,7 @@ void spc_bsdf_glint(SpeculaClosureQuery q, SpeculaShadingInputs s, sampler1DArra
                     float kernel_scale, int derivative, int derivatives, int quad_lights, int fresnel, vec3 f0, float ior, vec3 eta, vec3 k,
                     vec3 base_color, vec2 lean_mean, vec3 lean_cov, vec3 normal,
                     vec3 tangent, vec2 uv, vec2 duvdx, vec2 duvdy, float uv_scale, vec3 dndx, vec3 dndy,
-                    int footprint_centre, out SpeculaClosure bsdf) {
+                    int footprint_centre, float flake_size, float flake_roughness, out SpeculaClosure bsdf) {
     // footprint_centre has no effect here: a fragment is at its pixel centre, so "sample" and "pixel" agree.
     bsdf = spc_closure_none();
     if (q.kind != SPC_QUERY_DIRECTION) {  // polygon queries: not in GLSL (the CPU has glint_area.h); the host samples this lobe
@@ -217,7 +273,9 @@ void spc_bsdf_glint(SpeculaClosureQuery q, SpeculaShadingInputs s, sampler1DArra
     gq.detMinv = SPC_GLINT_SIGMA_O * SPC_GLINT_SIGMA_O / (sx * sy * gq.sq);
     gq.relArea = relative_area;
     gq.jitter = density_jitter;
-    gq.lcBase = log_density / 1.38629436 - 15.0;
+    // Flakes on: C20 counts one microfacet per flake area (glint_flakes.h flakeLogDensity).
+    bool flakes = flake_size > 0.0 && !isinf(flake_size);
+    gq.lcBase = (flakes ? -2.0 * log(flake_size) : log_density) / 1.38629436 - 15.0;
     vec2 hs = vec2(-h.x / h.z, -h.y / h.z);
     gq.mh = vec2(mi00 * hs.x + mi01 * hs.y, mi11 * hs.y);
     gq.pB = spc_glint_beckmann(hs, sx, sy, r, gq.sq);
@@ -263,21 +321,39 @@ void spc_bsdf_glint(SpeculaClosureQuery q, SpeculaShadingInputs s, sampler1DArra
     vec2 a1 = l1 >= l2 ? J1 : J2, a2 = l1 >= l2 ? J2 : J1;
     float la1 = sqrt(max(l1, l2)), la2 = sqrt(min(l1, l2));
     float amax = max(max_anisotropy, 1.0);
-    float P;
-    if (!(la2 > 0.0) || isinf(la1) || isnan(la1)) {
-        P = gq.pB;
-    } else {
-        if (la1 > amax * la2) {
-            a2 = a2 * (la1 / (amax * la2));
-            la2 = la1 / amax;
-        }
-        float lodP = clamp(15.0 + log2(la2), 0.0, 15.0);
-        float i0f = floor(lodP);
-        int i0 = int(i0f);
-        float w = lodP - i0f;
-        P = spc_glint_level(dictionary, gq, i0, suv, a1, a2);
-        if (w > 0.0) P = (1.0 - w) * P + w * spc_glint_level(dictionary, gq, min(i0 + 1, 15), suv, a1, a2);
+    bool footprintValid = la2 > 0.0 && !isinf(la1) && !isnan(la1);
+    if (footprintValid && la1 > amax * la2) {
+        a2 = a2 * (la1 / (amax * la2));
+        la2 = la1 / amax;
     }
+    // Explicit flakes (glint_flakes.h): weight 1 - smoothstep(1/2, 1, footprint / flake size) on the flakes of the
+    // fragment's footprint (a fragment is its pixel's centre), the rest on C20's counting.
+    float we = 0.0, pFlake = 0.0;
+    vec2 fuv = uv * uv_scale;
+    if (flakes && abs(fuv.x / flake_size) < 8388608.0 && abs(fuv.y / flake_size) < 8388608.0) {
+        float width = footprintValid ? sqrt(sqrt(dot(a1, a1) * dot(a2, a2))) : 0.0;
+        float x = clamp((width / flake_size - 0.5) / 0.5, 0.0, 1.0);
+        we = width > 0.0 ? 1.0 - x * x * (3.0 - 2.0 * x) : 1.0;
+        float ea = sx * sx, ec = sy * sy, eb = r * sx * sy;
+        float minEigen = 0.5 * (ea + ec - sqrt((ea - ec) * (ea - ec) + 4.0 * eb * eb));
+        float sf = max(min(flake_roughness >= 1e-3 ? flake_roughness : 1e-3, sqrt(0.8 * max(minEigen, 0.0))), 1e-4);
+        vec2 fx = footprintValid ? J1 : vec2(0.0), fy = footprintValid ? J2 : vec2(0.0);
+        pFlake = spc_glint_flakes_sdf(fuv, fx, fy, flake_size, relative_area, sx, sy, r, sf, hs);
+    }
+    float P = 0.0;
+    if (we < 1.0) {
+        if (!footprintValid) {
+            P = gq.pB;
+        } else {
+            float lodP = clamp(15.0 + log2(la2), 0.0, 15.0);
+            float i0f = floor(lodP);
+            int i0 = int(i0f);
+            float w = lodP - i0f;
+            P = spc_glint_level(dictionary, gq, i0, suv, a1, a2);
+            if (w > 0.0) P = (1.0 - w) * P + w * spc_glint_level(dictionary, gq, min(i0 + 1, 15), suv, a1, a2);
+        }
+    }
+    P = (1.0 - we) * P + we * pFlake;
     // S7: D = P / h_z^4, V-cavity G, F at wo.h (glint-brdf.md §1; the fresnelPorts model, as GlintLobe's Fresnel);
     // returns f cos = base_color F G D / (4 wo.z).
     float hz2 = h.z * h.z;

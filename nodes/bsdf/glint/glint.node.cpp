@@ -58,6 +58,7 @@ struct Params {
     float uvScale;
     Vec3 dndx, dndy;
     GlintFootprintCentre footprintCentre;
+    float flakeSize, flakeRoughness;
 };
 
 NodeParams<Params> declare() {
@@ -97,7 +98,13 @@ NodeParams<Params> declare() {
             "uv: the pixel's glints are the footprint convolved with the pixel filter, and which cells a pixel sees "
             "depends on its samples' positions) or pixel (the pixel centre's uv and normal, from the sample's offset "
             "and the duvdx/dndx ports: every sample of a pixel counts the same cells around the same half vectors, "
-            "so the sparkle pattern comes from the surface, not the sampler; what a GPU fragment does)").uniform();
+            "so the sparkle pattern comes from the surface, not the sampler; what a GPU fragment does)").uniform()
+    .f("flake_size", &Params::flakeSize, 0.f, "size of a flake in the cell grid's units (uv x uv_scale); 0 = off. Where "
+       "a pixel spans less than a flake, each flake is a flat platelet of its own slope (drawn from the lobe), seen as "
+       "a separate sparkle; from one flake per pixel on, the glints count one microfacet per flake area (log_density "
+       "= ln(1/flake_size^2) replaces the port)").range(0.f, 0.01f).hard(0.f, 1e3f)
+    .f("flake_roughness", &Params::flakeRoughness, 0.04f, "RMS slope of each flake's own lobe (kept below 0.89 of the "
+       "lobe's smallest RMS slope): how sharply a flake mirrors the light").range(0.005f, 0.1f).hard(0.f, 1.f);
     return l;
 }
 const NodeParams<Params> kParams = declare();
@@ -123,6 +130,9 @@ void shadeGlint(EvalContext& c, const Instr& i, bool gpuTwin) {
     p.integrateQuadLights = in.quadLights == GlintQuadLights::Integrated && !gpuTwin;
     p.sigmaX = std::clamp(p.sigmaX, 0.01f, 1.f);
     p.sigmaY = std::clamp(p.sigmaY, 0.01f, 1.f);
+    p.flakeSize = in.flakeSize > 0.f && std::isfinite(in.flakeSize) ? in.flakeSize : 0.f;
+    p.flakeRoughness = in.flakeRoughness;
+    if (p.flakeSize > 0.f) p.logDensity = flakeLogDensity(p.flakeSize);
     const ShadingPoint* sp = c.sp;
     // footprint_centre "pixel": the lobe is the pixel centre's, its uv footprint and its frame both moved back by the
     // sample's offset from the centre (ShadingPoint::pixelOffset; 0 off camera hits and on a GPU, where a fragment is
@@ -192,7 +202,10 @@ void reg(NodeRegistry& r) {
                              "closed form on the CPU (polygon queries, render.area_lights \"ltc\"): each EWA cell's "
                              "slope distribution integrated over the light's half-slope region, at the GGAA MIPs of "
                              "the light's centre (glint_area.h). The GLSL function does not answer polygon queries: "
-                             "it returns partial = true and the host samples the light.",
+                             "it returns partial = true and the host samples the light. flake_size > 0: explicit flakes where a "
+                             "pixel spans less than a flake (a Voronoi platelet per flake, its slope drawn from the "
+                             "lobe, glint_flakes.h), handing over to the counting from half a flake to one, on "
+                             "both backends; where they show, quad lights are sampled.",
                              kParams, kOutputs, &cpu, kNeedsDerivatives);
     s.resources = {{"dictionary", "sampler1DArray", ResourceSpec::Kind::BuiltinTable,
                     "glint dictionary (Chermain et al. 2020): 64 x 1024 layers RGBA32F, box MIP chain 0..6",

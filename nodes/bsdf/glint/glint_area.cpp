@@ -648,20 +648,227 @@ bool glintSamplePolygonByCells(const Dictionary& dict, const GlintParams& p, con
     return glintSamplePolygon(vertices, count, u, seed, wi);  // no try landed inside: the cosine-weighted fallback
 }
 
+// ---- explicit flakes under quad lights -------------------------------------------------------------------------
+
+namespace {
+
+// The light's pieces and their half-slope regions (h~), shared by every flake of the footprint, and the masses of the
+// last flake set's flakes per piece (for the sampler).
+struct FlakeRegions {
+    std::vector<std::array<Vec3, 4>> lightPieces;
+    std::vector<int> lightCounts;
+    std::vector<double> lightSpreads;
+    std::vector<DVec2> h;      // every piece's region in h~, one after the other
+    std::vector<int> offsets;  // piece k: h[offsets[k] .. offsets[k + 1])
+    std::vector<DVec2> m;      // one piece mapped to a flake's m'
+};
+thread_local FlakeRegions flakeScratch;
+
+// Builds flakeScratch's regions; returns the number of visible pieces.
+int flakeRegions(float sigmaF, const Vec3& wo, const Vec3* vertices, int count, const GlintAreaSettings& settings) {
+    FlakeRegions& r = flakeScratch;
+    r.lightPieces.clear(), r.lightCounts.clear(), r.lightSpreads.clear(), r.h.clear(), r.offsets.assign(1, 0);
+    if (count < 3 || count > 4 || wo.z <= 0.f || !(sigmaF > 0.f)) return 0;
+    splitLight(wo, vertices, count, settings.splitTolerance, 0, std::clamp(settings.maxSplitDepth, 0, 3), r.lightPieces,
+               r.lightCounts, r.lightSpreads);
+    // The chords' tolerance is measured in the flakes' own space (scale σ_o / σ_f: GlintShape's M^-1 of an isotropic
+    // lobe of RMS slope σ_f; make() keeps σ >= 0.01, a finer tolerance below that).
+    // The tolerance is the cells' relative to their lobes' width σ_l, here relative to the flake's σ_o in m'.
+    const GlintShape flakeShape = GlintShape::make(sigmaF, sigmaF, 0.f);
+    GlintAreaSettings chords = settings;
+    chords.chordTolerance = settings.chordTolerance * float(kSigmaO / kSigmaL);
+    DVec2 region[kMaxRegionVertices];
+    for (size_t k = 0; k < r.lightPieces.size(); ++k) {
+        const int n = halfSlopeRegion(wo, r.lightPieces[k].data(), r.lightCounts[k], flakeShape, chords, region);
+        if (n < 3) continue;
+        r.h.insert(r.h.end(), region, region + n);
+        r.offsets.push_back(int(r.h.size()));
+    }
+    return int(r.offsets.size()) - 1;
+}
+
+// Piece k of the regions in flake m's space m' = (h~ - m) σ_o / σ_f (into flakeScratch.m).
+const DVec2* pieceInFlakeSpace(int k, Vec2 slope, float sigmaF, int& n) {
+    FlakeRegions& r = flakeScratch;
+    const double scale = kSigmaO / double(sigmaF);
+    n = r.offsets[k + 1] - r.offsets[k];
+    r.m.resize(size_t(n));
+    for (int e = 0; e < n; ++e) r.m[size_t(e)] = (r.h[size_t(r.offsets[k] + e)] - DVec2(slope)) * scale;
+    return r.m.data();
+}
+
+// The moments of N(0, σ_o² I) over one piece in m' (gaussianPolygonMoments), with two exact-to-1e-9 shortcuts for the
+// usual case of a flake far narrower than the light: a piece whose boundary is more than 6.5 σ_o from the origin
+// holds all of the mass (moments (1, 0, 0)) or none of it, without the edge integrals.
+DVec3 flakePieceMoments(const DVec2* q, int n) {
+    double minDist2 = 1e300;
+    for (int e = 0; e < n; ++e) {
+        const DVec2 a = q[e], d = q[(e + 1) % n] - a;
+        const double len2 = glm::dot(d, d);
+        const double t = len2 > 0.0 ? std::clamp(-glm::dot(a, d) / len2, 0.0, 1.0) : 0.0;
+        const DVec2 c = a + t * d;
+        minDist2 = std::min(minDist2, glm::dot(c, c));
+    }
+    const double far = 6.5 * kSigmaO;  // the mass beyond 6.5 σ_o of an isotropic 2D Gaussian: exp(-6.5^2 / 2) = 6e-10
+    if (minDist2 > far * far) return insidePolygon(q, n, DVec2(0.0)) ? DVec3(1.0, 0.0, 0.0) : DVec3(0.0);
+    return gaussianPolygonMoments(q, n);
+}
+
+// One flake's (A1) integral without F over the pieces, and its mass-weighted centroid sum (h~).
+double flakeIntegral(const Flake& flake, float sigmaF, const Vec3& wo, int pieces, DVec2& centroidSum, double& mass) {
+    const double back = double(sigmaF) / kSigmaO;  // m' -> h~ - m
+    double integral = 0.0;
+    for (int k = 0; k < pieces; ++k) {
+        int n;
+        const DVec2* q = pieceInFlakeSpace(k, flake.slope, sigmaF, n);
+        const DVec3 mo = flakePieceMoments(q, n);
+        if (!(mo.x > 0.0)) continue;
+        const DVec2 hs = DVec2(flake.slope) + DVec2(mo.y / mo.x, mo.z / mo.x) * back;
+        Vec3 h;
+        integral += mo.x * smoothFactor(wo, hs, h);
+        centroidSum += mo.x * hs, mass += mo.x;
+    }
+    return integral;
+}
+
+}  // namespace
+
+bool flakePolygonIntegral(const FlakeSet& flakes, float sigmaF, const Vec3& wo, const Vec3* vertices, int count,
+                          GlintAreaResult& out, const GlintAreaSettings& settings) {
+    out = GlintAreaResult{};
+    const int pieces = flakeRegions(sigmaF, wo, vertices, count, settings);
+    if (pieces == 0) return false;
+    double integral = 0.0, mass = 0.0;
+    DVec2 centroid(0.0);
+    for (int f = 0; f < flakes.count; ++f) {
+        DVec2 c(0.0);
+        double m = 0.0;
+        integral += double(flakes.weight[f]) * flakeIntegral(flakes.flakes[f], sigmaF, wo, pieces, c, m);
+        centroid += double(flakes.weight[f]) * c, mass += double(flakes.weight[f]) * m;
+    }
+    out.integral = float(std::max(integral, 0.0));
+    out.cells = flakes.count;
+    if (mass > 0.0) out.hCentroid = Vec3(glm::normalize(DVec3(-centroid.x / mass, -centroid.y / mass, 1.0)));
+    else out.hCentroid = Vec3(glm::normalize(DVec3(-flakeScratch.h[0].x, -flakeScratch.h[0].y, 1.0)));
+    return true;
+}
+
+bool flakeSamplePolygon(const FlakeSet& flakes, float sigmaF, const Vec3& wo, const Vec3* vertices, int count,
+                        const Vec2& u, uint64_t seed, Vec3& wi, const GlintAreaSettings& settings) {
+    const int pieces = flakeRegions(sigmaF, wo, vertices, count, settings);
+    if (pieces == 0) return false;
+    // The flake and the piece by inversion of their cumulative masses (flake weight x its mass in the piece) with u.x,
+    // rescaled to [0, 1) for reuse; then a point of N(0, σ_o²) per axis restricted to the piece's bounding box in m'
+    // (CDF erf(x / (σ_o √2)) / 2 inverted with erfinvF), kept if inside the piece.
+    constexpr int kMaxPieces = 64;
+    const int kept = std::min(pieces, kMaxPieces);
+    double masses[FlakeSet::kMaxFlakes * kMaxPieces], total = 0.0;
+    for (int f = 0; f < flakes.count; ++f)
+        for (int k = 0; k < kept; ++k) {
+            int n;
+            const DVec2* q = pieceInFlakeSpace(k, flakes.flakes[f].slope, sigmaF, n);
+            const double mk = double(flakes.weight[f]) * std::max(flakePieceMoments(q, n).x, 0.0);
+            masses[f * kept + k] = mk;
+            total += mk;
+        }
+    if (!(total > 0.0)) return glintSamplePolygon(vertices, count, u, seed, wi);
+    double target = double(u.x) * total, acc = 0.0, ux = u.x;
+    int pick = flakes.count * kept - 1;
+    for (int c = 0; c < flakes.count * kept; ++c) {
+        if (target < acc + masses[c]) {
+            pick = c;
+            ux = std::clamp((target - acc) / masses[c], 0.0, 1.0 - 1e-12);
+            break;
+        }
+        acc += masses[c];
+    }
+    const Flake& flake = flakes.flakes[pick / kept];
+    int n;
+    const DVec2* q = pieceInFlakeSpace(pick % kept, flake.slope, sigmaF, n);
+    double x0 = 1e300, x1 = -1e300, y0 = 1e300, y1 = -1e300;
+    for (int e = 0; e < n; ++e) {
+        x0 = std::min(x0, q[e].x), x1 = std::max(x1, q[e].x);
+        y0 = std::min(y0, q[e].y), y1 = std::max(y1, q[e].y);
+    }
+    const double ir = 1.0 / (kSigmaO * std::sqrt(2.0));
+    auto inv = [&](double lo, double hi, double v) {
+        const double fl = 0.5 * std::erf(lo * ir), fh = 0.5 * std::erf(hi * ir);
+        const double t = std::clamp(2.0 * (fl + v * (fh - fl)), -0.9999999, 0.9999999);
+        return double(erfinvF(float(t))) / ir;
+    };
+    const double back = double(sigmaF) / kSigmaO;
+    uint64_t state = seed ^ 0x5EEDF1A4EULL;
+    for (int attempt = 0; attempt < 32; ++attempt) {
+        const double a = attempt == 0 ? ux : unit(splitMix(state));
+        const double b = attempt == 0 ? double(u.y) : unit(splitMix(state));
+        const DVec2 m(inv(x0, x1, a), inv(y0, y1, b));
+        if (!insidePolygon(q, n, m)) continue;
+        const DVec2 hs = DVec2(flake.slope) + m * back;
+        const DVec3 h = glm::normalize(DVec3(-hs.x, -hs.y, 1.0));
+        const DVec3 o(wo);
+        const DVec3 w = 2.0 * glm::dot(o, h) * h - o;
+        if (!(w.z > 0.0)) continue;
+        wi = Vec3(glm::normalize(w));
+        return true;
+    }
+    return glintSamplePolygon(vertices, count, u, seed, wi);
+}
+
 // ---- GlintLobe's polygon entries (declared in glint_bsdf.h) ----------------------------------------------------
+
+namespace {
+
+// The two shares of one polygon query: (1 - w_e) x the counted cells' integral and w_e x the flake's, each without F,
+// with the half vectors F is read at. Both are 0 where a part has no weight (or no flake lies under the point).
+struct PolygonShares {
+    GlintAreaResult glint, flake;
+    double glintShare = 0.0, flakeShare = 0.0;
+    bool visible = false;
+};
+PolygonShares polygonShares(const GlintLobe& lobe, const Dictionary& dict, const GlintShape& shape, const LobeQuery& q,
+                            const Vec3* vertices, int count) {
+    PolygonShares s;
+    const float we = lobe.flakeWeight();
+    if (we < 1.f && glintPolygonIntegral(dict, lobe.params(), shape, lobe.inputs(), q.wo, vertices, count, s.glint)) {
+        s.visible = true;
+        s.glintShare = (1.0 - we) * s.glint.integral;
+    }
+    if (we > 0.f && lobe.flakes().count > 0 &&
+        flakePolygonIntegral(lobe.flakes(), lobe.flakeSigma(), q.wo, vertices, count, s.flake)) {
+        s.visible = true;
+        s.flakeShare = double(we) * s.flake.integral;
+    }
+    return s;
+}
+
+}  // namespace
 
 bool GlintLobe::integratePolygon(const LobeQuery& q, const Vec3* vertices, int count, Color3& result) const {
     if (!p_.integrateQuadLights) return false;  // bsdf.glint quad_lights = "sampled": the integrator samples the light
     result = Color3(0.f);
-    GlintAreaResult r;
-    if (glintPolygonIntegral(dict_, p_, shape_, in_, q.wo, vertices, count, r) && r.integral > 0.f)
-        result = fresnel_.eval(glm::dot(q.wo, r.hCentroid)) * r.integral;  // F at the region's centroid (A1)
-    return true;  // invisible lights integrate to 0, as LtcLobe
+    const PolygonShares s = polygonShares(*this, dict_, shape_, q, vertices, count);
+    // F at each part's centroid (A1); invisible lights integrate to 0, as LtcLobe.
+    if (s.glintShare > 0.0) result += fresnel_.eval(glm::dot(q.wo, s.glint.hCentroid)) * float(s.glintShare);
+    if (s.flakeShare > 0.0) result += fresnel_.eval(glm::dot(q.wo, s.flake.hCentroid)) * float(s.flakeShare);
+    return true;
 }
 
 bool GlintLobe::samplePolygon(const LobeQuery& q, const Vec3* vertices, int count, const Vec2& u, uint64_t seed,
                               Vec3& wi) const {
-    return p_.integrateQuadLights && q.wo.z > 0.f && glintSamplePolygonByCells(dict_, p_, shape_, in_, q.wo, vertices, count, u, seed, wi);
+    if (!p_.integrateQuadLights || q.wo.z <= 0.f) return false;
+    if (!(flakeWeight_ > 0.f && flakes_.count > 0))  // the counted cells alone, as before the flakes
+        return glintSamplePolygonByCells(dict_, p_, shape_, in_, q.wo, vertices, count, u, seed, wi);
+    // Flakes and cells: the part by its share of the integral, u.x rescaled for reuse.
+    const PolygonShares s = polygonShares(*this, dict_, shape_, q, vertices, count);
+    const double total = s.glintShare + s.flakeShare;
+    if (!(total > 0.0)) return s.visible && glintSamplePolygon(vertices, count, u, seed, wi);
+    const double pFlake = s.flakeShare / total;
+    if (double(u.x) < pFlake) {
+        const Vec2 uu(float(std::min(double(u.x) / pFlake, 0.99999994)), u.y);
+        return flakeSamplePolygon(flakes_, flakeSigma_, q.wo, vertices, count, uu, seed, wi);
+    }
+    const Vec2 uu(float(std::min((double(u.x) - pFlake) / (1.0 - pFlake), 0.99999994)), u.y);
+    return glintSamplePolygonByCells(dict_, p_, shape_, in_, q.wo, vertices, count, uu, seed, wi);
 }
 
 }  // namespace specula::glint

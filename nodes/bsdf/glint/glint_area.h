@@ -93,4 +93,18 @@ bool glintSamplePolygonByCells(const Dictionary& dict, const GlintParams& p, con
                                const GlintEvalInputs& in, const Vec3& wo, const Vec3* vertices, int count,
                                const Vec2& u, uint64_t seed, Vec3& wi, const GlintAreaSettings& settings = {});
 
+// Explicit flakes (glint_flakes.h) under a quad light: each flake's Gaussian N(m_k, σ_f² I) over the light's
+// half-slope region, in m' = (h~ - m_k) σ_o / σ_f where it is the isotropic N(0, σ_o² I) of gaussianPolygonMoments
+// (exact for the polygonal region), the smooth factor at its centroid in each piece of the light (splitLight, as the
+// cells); the footprint's flakes weighted as in flakeSetSdf. integral: ∫_light G D_flakes / (4 wo.z) cos dω_i without
+// F; hCentroid: where the caller evaluates F. False when the light is invisible.
+bool flakePolygonIntegral(const FlakeSet& flakes, float sigmaF, const Vec3& wo, const Vec3* vertices, int count,
+                          GlintAreaResult& out, const GlintAreaSettings& settings = {});
+// A shadow-ray direction with density ∝ that integrand, approximately: a flake by its share, a piece of the light by
+// the flake's mass in it, then a point of the flake's Gaussian restricted to the piece (per axis by inversion of its
+// CDF over the piece's bounding box in m', then rejection), deterministic from (u, seed); the cosine-weighted
+// glintSamplePolygon when no try lands inside.
+bool flakeSamplePolygon(const FlakeSet& flakes, float sigmaF, const Vec3& wo, const Vec3* vertices, int count,
+                        const Vec2& u, uint64_t seed, Vec3& wi, const GlintAreaSettings& settings = {});
+
 }  // namespace specula::glint

@@ -12,6 +12,7 @@
 #include "nodes/bsdf/glint/glint_cells.h"
 #include "nodes/bsdf/glint/glint_correlation.h"
 #include "nodes/bsdf/glint/glint_dictionary.h"
+#include "nodes/bsdf/glint/glint_flakes.h"
 #include "nodes/bsdf/glint/glint_ggaa.h"
 #include "nodes/bsdf/glint/glint_params.h"
 #include "nodes/bsdf/glint/glint_reference.h"
@@ -78,36 +79,80 @@ constexpr float kGlintBeckmannFraction = 0.15f;
 // kGlintBeckmannFraction, the limiting Beckmann lobe. Exact pdf, with dw_h = d(slope) h_z^3 (D h_z dw_h = P22 d(slope))
 // and dw_i = 4 (wo.h) dw_h:
 //   pdf(wi) = [beta P_B(h~) + (1 - beta) P_unfiltered(h~) / keptWeight] / h_z^3 / (4 wo.h).
+// With explicit flakes (GlintParams::flakeSize > 0, glint_flakes.h) the slope density is w_e P_flakes + (1 - w_e) P:
+// the footprint's flakes (findFlakes: box-filtered over the footprint) with weight w_e = flakeWeight(footprint), and
+// the sampler picks them with probability w_e (where the footprint holds a flake; a flake by its weight), the mixture
+// above otherwise.
 // The cells are built on the first query and shared by every later query of the shading point (the lobe lives in
-// one thread's scratch arena for one shading point).
+// one thread's scratch arena for one shading point); a lobe whose flakes take the whole weight never builds them.
 class GlintLobe final : public BsdfLobe {
 public:
     GlintLobe(const Dictionary& dict, const GlintParams& p, const GlintEvalInputs& in, const Fresnel& fresnel)
-        : dict_(dict), p_(p), shape_(GlintShape::make(p.sigmaX, p.sigmaY, p.rho)), in_(in), fresnel_(fresnel) {}
+        : dict_(dict), p_(p), shape_(GlintShape::make(p.sigmaX, p.sigmaY, p.rho)), in_(in), fresnel_(fresnel) {
+        if (p_.flakeSize > 0.f) {
+            const Footprint fp = footprint(in_.duvdx, in_.duvdy, p_.maxAniso);
+            const float width = fp.valid ? std::sqrt(std::sqrt(glm::dot(fp.a1, fp.a1) * glm::dot(fp.a2, fp.a2))) : 0.f;
+            const bool located = flakeCoordinatesValid(in_.uv, p_.flakeSize);
+            flakeWeight_ = located ? glint::flakeWeight(width, p_.flakeSize) : 0.f;
+            flakeSigma_ = glint::flakeSigma(p_.flakeRoughness, shape_);
+            // A footprint the LOD rejects (a zero minor axis, a non-finite axis) reads the flake under its centre.
+            const Vec2 dx = fp.valid ? in_.duvdx : Vec2(0.f), dy = fp.valid ? in_.duvdy : Vec2(0.f);
+            if (flakeWeight_ > 0.f) flakes_ = findFlakes(in_.uv, dx, dy, p_.flakeSize, p_.relArea, shape_, flakeSigma_);
+        }
+    }
     LobeKind kind() const override { return LobeKind::Specular; }
     using BsdfLobe::sample;
     LobeValue evalPdf(const LobeQuery& q) const override {
         LobeValue v;
-        const GlintCellSet& c = cells();
-        const GlintQueryValue g = glintQuery<true>(dict_, p_, shape_, in_, c, q.wo, q.wi, q.lightDistance);
-        if (!g.valid) return v;
-        if (g.fcos > 0.f) v.f = fresnel_.eval(g.woh) * g.fcos;
-        const float beta = beckmannFraction();
-        const float glint = c.keptWeight > 0.f ? g.pUnfiltered / c.keptWeight : 0.f;
-        v.pdf = (beta * g.pB + (1.f - beta) * glint) / (g.h.z * g.h.z * g.h.z * 4.f * g.woh);
+        const float we = flakeWeight_;
+        float fcos = 0.f, pdf = 0.f, woh = 0.f;
+        HalfVector hv;
+        if (we < 1.f) {
+            const GlintCellSet& c = cells();
+            const GlintQueryValue g = glintQuery<true>(dict_, p_, shape_, in_, c, q.wo, q.wi, q.lightDistance);
+            if (!g.valid) return v;
+            const float beta = beckmannFraction();
+            const float glint = c.keptWeight > 0.f ? g.pUnfiltered / c.keptWeight : 0.f;
+            fcos = (1.f - we) * g.fcos;
+            const float glintPdf = (beta * g.pB + (1.f - beta) * glint) / (g.h.z * g.h.z * g.h.z * 4.f * g.woh);
+            pdf = (1.f - flakeSampleWeight()) * glintPdf;
+            woh = g.woh;
+        }
+        if (we > 0.f && flakes_.count > 0) {
+            if (!halfVector(q.wo, q.wi, hv)) return v;
+            const Vec3& h = hv.h;
+            const float pf = flakeSetSdf(flakes_, Vec2(-h.x / h.z, -h.y / h.z), flakeSigma_);
+            if (hv.wih > 0.f) fcos += we * fCosFromSdf(pf, hv, q.wo, q.wi);
+            pdf += flakeSampleWeight() * (pf / flakes_.covered) / (h.z * h.z * h.z * 4.f * hv.woh);
+            woh = hv.woh;
+        }
+        if (fcos > 0.f) v.f = fresnel_.eval(woh) * fcos;
+        v.pdf = pdf;
         return v;
     }
     bool sample(const LobeQuery& q, const Vec2& u, Vec3& wi) const override {
         const Vec3& wo = q.wo;
         if (wo.z <= 0.f) return false;
-        const float beta = beckmannFraction();
         Vec2 uu = u, slope;
-        if (uu.x < beta) {
-            uu.x = std::min(uu.x / beta, 0.99999994f);
-            slope = sampleBeckmannSlope(shape_, uu);
+        const float qf = flakeSampleWeight();
+        if (uu.x < qf) {
+            // A flake by its weight, then a slope of its Gaussian; u.x rescaled for each choice.
+            float t = std::min(uu.x / qf, 0.99999994f) * flakes_.covered;
+            int k = 0;
+            while (k + 1 < flakes_.count && t >= flakes_.weight[k]) t -= flakes_.weight[k++];
+            uu.x = std::clamp(t / flakes_.weight[k], 0.f, 0.99999994f);
+            slope = sampleFlakeSlope(flakes_.flakes[k].slope, flakeSigma_, uu);
         } else {
-            uu.x = std::min((uu.x - beta) / (1.f - beta), 0.99999994f);
-            if (!cells().sampleSlope(dict_, shape_, uu, slope)) return false;
+            if (flakeWeight_ >= 1.f) return false;  // an empty flake cell: nothing reflects here
+            if (qf > 0.f) uu.x = std::min((uu.x - qf) / (1.f - qf), 0.99999994f);
+            const float beta = beckmannFraction();
+            if (uu.x < beta) {
+                uu.x = std::min(uu.x / beta, 0.99999994f);
+                slope = sampleBeckmannSlope(shape_, uu);
+            } else {
+                uu.x = std::min((uu.x - beta) / (1.f - beta), 0.99999994f);
+                if (!cells().sampleSlope(dict_, shape_, uu, slope)) return false;
+            }
         }
         const Vec3 h = glm::normalize(Vec3(-slope.x, -slope.y, 1.f));
         const float woh = glm::dot(wo, h);
@@ -126,6 +171,7 @@ public:
         out.push_back({"log_density", {p_.logDensity}});
         out.push_back({"ggaa", {p_.ggaa ? 1.0 : 0.0}});
         out.push_back({"footprint_duv", {in_.duvdx.x, in_.duvdx.y, in_.duvdy.x, in_.duvdy.y}});
+        if (p_.flakeSize > 0.f) out.push_back({"flakes", {p_.flakeSize, flakeSigma_, flakeWeight_}});
     }
     // Quad lights (issue 11 item 2): the per-cell polygon integral and the shadow-ray direction (glint_area.cpp).
     bool integratePolygon(const LobeQuery& q, const Vec3* vertices, int count, Color3& result) const override;
@@ -146,6 +192,12 @@ public:
     float beckmannFraction() const {
         return p_.sampleGlints && cells().keptWeight > 0.f ? kGlintBeckmannFraction : 1.f;
     }
+    // The explicit flakes' share of the slope density (w_e: 0 without flakes or beyond one flake per footprint), the
+    // flake under the shading point, and the probability that sample() draws from it (w_e where a flake is present).
+    float flakeWeight() const { return flakeWeight_; }
+    const FlakeSet& flakes() const { return flakes_; }
+    float flakeSigma() const { return flakeSigma_; }
+    float flakeSampleWeight() const { return flakes_.count > 0 ? flakeWeight_ : 0.f; }
 
 private:
     const Dictionary& dict_;
@@ -153,6 +205,8 @@ private:
     GlintShape shape_;
     GlintEvalInputs in_;
     Fresnel fresnel_;
+    float flakeWeight_ = 0.f, flakeSigma_ = 0.f;
+    FlakeSet flakes_;
     mutable bool cellsBuilt_ = false;
     mutable GlintCellSet cells_;
 };

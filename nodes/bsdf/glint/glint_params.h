@@ -25,6 +25,10 @@ struct GlintParams {
     // Quad lights (polygon queries): integrate each cell's distribution over the light's half-vector region
     // (glint_area.h; noise-free, ~10-30x the cost of a light sample) or let the integrator sample the light.
     bool integrateQuadLights = false;
+    // Explicit flakes (glint_flakes.h): their size in the units of the cell grid (uv x uv_scale; 0 = off, C20's
+    // counting at every distance) and the RMS slope of each flake's own lobe.
+    float flakeSize = 0.f;
+    float flakeRoughness = 0.04f;
 };
 
 }  // namespace specula::glint
