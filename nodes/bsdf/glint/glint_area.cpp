@@ -168,8 +168,9 @@ double cellPolygonMass(const Dictionary& dict, int k, int i, int j, const DVec2*
 
 DVec3 gaussianPolygonMoments(const DVec2* q, int n) {
     // The moments of edgeMoments with p = N(0, σ_o²) and F(y) = erf(y / (σ_o √2)) / 2, on each edge's part with
-    // |x| < 8 σ_o or |y| < 8 σ_o (beyond it p is below 1e-13 of its peak), Simpson on steps of at most σ_o / 8
-    // (relative error ~1e-6).
+    // |x| < 8 σ_o or |y| < 8 σ_o (beyond it p is below 1e-13 of its peak and the integrand is exactly 0), Simpson on
+    // steps of at most σ_o / 8 (relative error ~1e-6). Only that part is stepped: an edge of a flake's region
+    // (glint_flakes.h) can be hundreds of σ_o long in m', of which at most two slabs 16 σ_o wide contribute.
     const double so = kSigmaO, lim = 8.0 * so, h = so / 8.0;
     const double norm = 1.0 / (so * std::sqrt(2.0 * kPiD)), ir = 1.0 / (so * std::sqrt(2.0));
     auto pdf = [&](double x) { return norm * std::exp(-0.5 * x * x / (so * so)); };
@@ -180,7 +181,6 @@ DVec3 gaussianPolygonMoments(const DVec2* q, int n) {
         const DVec2 d = b - a;
         const double len = std::max(std::abs(d.x), std::abs(d.y));
         if (len == 0.0) continue;
-        const int steps = std::clamp(int(std::ceil(len / h)), 1, 4096);
         auto phi = [&](double tv) {
             const double x = a.x + tv * d.x, y = a.y + tv * d.y;
             DVec3 v(0.0);
@@ -191,15 +191,43 @@ DVec3 gaussianPolygonMoments(const DVec2* q, int n) {
             if (std::abs(y) < lim) v.z = cdf(x) * y * pdf(y);
             return v;
         };
-        const double dt = 1.0 / steps;
-        DVec3 sum(0.0), fa = phi(0.0);
-        for (int s = 0; s < steps; ++s) {
-            const double ta = s * dt;
-            const DVec3 fb = phi(ta + dt);
-            sum += fa + 4.0 * phi(ta + 0.5 * dt) + fb;
-            fa = fb;
+        // The parameter interval of the slab |c0 + t dc| < lim within [0, 1] (empty: lo >= hi).
+        auto slab = [&](double c0, double dc, double& lo, double& hi) {
+            if (dc == 0.0) {
+                lo = 0.0, hi = std::abs(c0) < lim ? 1.0 : 0.0;
+                return;
+            }
+            const double t0 = (-lim - c0) / dc, t1 = (lim - c0) / dc;
+            lo = std::max(std::min(t0, t1), 0.0), hi = std::min(std::max(t0, t1), 1.0);
+        };
+        double xl, xh, yl, yh;
+        slab(a.x, d.x, xl, xh);
+        slab(a.y, d.y, yl, yh);
+        double spans[2][2];
+        int count = 0;
+        if (xl < xh) spans[count][0] = xl, spans[count++][1] = xh;
+        if (yl < yh) {
+            if (count == 1 && yl <= spans[0][1] && xl <= yh) {  // overlapping: one span
+                spans[0][0] = std::min(spans[0][0], yl), spans[0][1] = std::max(spans[0][1], yh);
+            } else {
+                spans[count][0] = yl, spans[count++][1] = yh;
+            }
         }
-        total += DVec3(-d.x * sum.x, -d.x * sum.y, d.y * sum.z) * (dt / 6.0);
+        DVec3 sum(0.0);
+        for (int k = 0; k < count; ++k) {
+            const double t0 = spans[k][0], width = spans[k][1] - spans[k][0];
+            const int steps = std::clamp(int(std::ceil(width * len / h)), 1, 4096);
+            const double dt = width / steps;
+            DVec3 part(0.0), fa = phi(t0);
+            for (int s = 0; s < steps; ++s) {
+                const double ta = t0 + s * dt;
+                const DVec3 fb = phi(ta + dt);
+                part += fa + 4.0 * phi(ta + 0.5 * dt) + fb;
+                fa = fb;
+            }
+            sum += part * (dt / 6.0);
+        }
+        total += DVec3(-d.x * sum.x, -d.x * sum.y, d.y * sum.z);
     }
     return total;
 }
@@ -816,40 +844,36 @@ bool flakeSamplePolygon(const FlakeSet& flakes, float sigmaF, const Vec3& wo, co
 
 // ---- GlintLobe's polygon entries (declared in glint_bsdf.h) ----------------------------------------------------
 
-namespace {
-
-// The two shares of one polygon query: (1 - w_e) x the counted cells' integral and w_e x the flake's, each without F,
-// with the half vectors F is read at. Both are 0 where a part has no weight (or no flake lies under the point).
-struct PolygonShares {
-    GlintAreaResult glint, flake;
-    double glintShare = 0.0, flakeShare = 0.0;
-    bool visible = false;
-};
-PolygonShares polygonShares(const GlintLobe& lobe, const Dictionary& dict, const GlintShape& shape, const LobeQuery& q,
-                            const Vec3* vertices, int count) {
-    PolygonShares s;
-    const float we = lobe.flakeWeight();
-    if (we < 1.f && glintPolygonIntegral(dict, lobe.params(), shape, lobe.inputs(), q.wo, vertices, count, s.glint)) {
+const GlintPolygonShares& GlintLobe::polygonShares(const Vec3& wo, const Vec3* vertices, int count) const {
+    GlintPolygonShares& s = polygonShares_;
+    if (s.matches(wo, vertices, count)) return s;
+    s = GlintPolygonShares{};
+    const float we = flakeWeight_;
+    GlintAreaResult r;
+    if (we < 1.f && glintPolygonIntegral(dict_, p_, shape_, in_, wo, vertices, count, r)) {
         s.visible = true;
-        s.glintShare = (1.0 - we) * s.glint.integral;
+        s.glint = (1.0 - we) * r.integral;
+        s.hGlint = r.hCentroid;
     }
-    if (we > 0.f && lobe.flakes().count > 0 &&
-        flakePolygonIntegral(lobe.flakes(), lobe.flakeSigma(), q.wo, vertices, count, s.flake)) {
+    if (we > 0.f && flakes_.count > 0 && flakePolygonIntegral(flakes_, flakeSigma_, wo, vertices, count, r)) {
         s.visible = true;
-        s.flakeShare = double(we) * s.flake.integral;
+        s.flake = double(we) * r.integral;
+        s.hFlake = r.hCentroid;
     }
+    s.valid = count >= 0 && count <= 4;
+    s.wo = wo;
+    s.count = count;
+    for (int k = 0; k < count && k < 4; ++k) s.vertices[k] = vertices[k];
     return s;
 }
-
-}  // namespace
 
 bool GlintLobe::integratePolygon(const LobeQuery& q, const Vec3* vertices, int count, Color3& result) const {
     if (!p_.integrateQuadLights) return false;  // bsdf.glint quad_lights = "sampled": the integrator samples the light
     result = Color3(0.f);
-    const PolygonShares s = polygonShares(*this, dict_, shape_, q, vertices, count);
+    const GlintPolygonShares& s = polygonShares(q.wo, vertices, count);
     // F at each part's centroid (A1); invisible lights integrate to 0, as LtcLobe.
-    if (s.glintShare > 0.0) result += fresnel_.eval(glm::dot(q.wo, s.glint.hCentroid)) * float(s.glintShare);
-    if (s.flakeShare > 0.0) result += fresnel_.eval(glm::dot(q.wo, s.flake.hCentroid)) * float(s.flakeShare);
+    if (s.glint > 0.0) result += fresnel_.eval(glm::dot(q.wo, s.hGlint)) * float(s.glint);
+    if (s.flake > 0.0) result += fresnel_.eval(glm::dot(q.wo, s.hFlake)) * float(s.flake);
     return true;
 }
 
@@ -859,10 +883,10 @@ bool GlintLobe::samplePolygon(const LobeQuery& q, const Vec3* vertices, int coun
     if (!(flakeWeight_ > 0.f && flakes_.count > 0))  // the counted cells alone, as before the flakes
         return glintSamplePolygonByCells(dict_, p_, shape_, in_, q.wo, vertices, count, u, seed, wi);
     // Flakes and cells: the part by its share of the integral, u.x rescaled for reuse.
-    const PolygonShares s = polygonShares(*this, dict_, shape_, q, vertices, count);
-    const double total = s.glintShare + s.flakeShare;
+    const GlintPolygonShares& s = polygonShares(q.wo, vertices, count);
+    const double total = s.glint + s.flake;
     if (!(total > 0.0)) return s.visible && glintSamplePolygon(vertices, count, u, seed, wi);
-    const double pFlake = s.flakeShare / total;
+    const double pFlake = s.flake / total;
     if (double(u.x) < pFlake) {
         const Vec2 uu(float(std::min(double(u.x) / pFlake, 0.99999994)), u.y);
         return flakeSamplePolygon(flakes_, flakeSigma_, q.wo, vertices, count, uu, seed, wi);

@@ -85,6 +85,26 @@ constexpr float kGlintBeckmannFraction = 0.15f;
 // above otherwise.
 // The cells are built on the first query and shared by every later query of the shading point (the lobe lives in
 // one thread's scratch arena for one shading point); a lobe whose flakes take the whole weight never builds them.
+// The two shares of one polygon query (glint_area.cpp): (1 - w_e) x the counted cells' integral and w_e x the flakes',
+// each without F, with the half vectors F is read at; kept by the lobe for the light it was asked about last, so that
+// samplePolygon, asked right after integratePolygon for the same light, does not integrate again.
+struct GlintPolygonShares {
+    double glint = 0.0, flake = 0.0;
+    Vec3 hGlint{0.f, 0.f, 1.f}, hFlake{0.f, 0.f, 1.f};
+    bool visible = false;
+    // The query: wo and the light's vertices.
+    bool valid = false;
+    Vec3 wo{0.f};
+    int count = 0;
+    Vec3 vertices[4];
+    bool matches(const Vec3& w, const Vec3* v, int n) const {
+        if (!valid || n != count || w != wo) return false;
+        for (int k = 0; k < n; ++k)
+            if (v[k] != vertices[k]) return false;
+        return true;
+    }
+};
+
 class GlintLobe final : public BsdfLobe {
 public:
     GlintLobe(const Dictionary& dict, const GlintParams& p, const GlintEvalInputs& in, const Fresnel& fresnel)
@@ -198,6 +218,8 @@ public:
     const FlakeSet& flakes() const { return flakes_; }
     float flakeSigma() const { return flakeSigma_; }
     float flakeSampleWeight() const { return flakes_.count > 0 ? flakeWeight_ : 0.f; }
+    // The shares of a polygon query (computed, or the last query's when it was the same light).
+    const GlintPolygonShares& polygonShares(const Vec3& wo, const Vec3* vertices, int count) const;
 
 private:
     const Dictionary& dict_;
@@ -207,6 +229,7 @@ private:
     Fresnel fresnel_;
     float flakeWeight_ = 0.f, flakeSigma_ = 0.f;
     FlakeSet flakes_;
+    mutable GlintPolygonShares polygonShares_;
     mutable bool cellsBuilt_ = false;
     mutable GlintCellSet cells_;
 };
