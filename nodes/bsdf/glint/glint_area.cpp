@@ -594,6 +594,24 @@ bool insidePolygon(const DVec2* q, int n, DVec2 pt) {  // crossing number (R may
     return in;
 }
 
+// N(0, σ_o²) restricted to [lo, hi], by inversion of its CDF erf(x / (σ_o √2)) / 2 at v in [0, 1) (erfinvF).
+double truncatedGaussianInverse(double lo, double hi, double v) {
+    const double ir = 1.0 / (kSigmaO * std::sqrt(2.0));
+    const double fl = 0.5 * std::erf(lo * ir), fh = 0.5 * std::erf(hi * ir);
+    const double t = std::clamp(2.0 * (fl + v * (fh - fl)), -0.9999999, 0.9999999);
+    return double(erfinvF(float(t))) / ir;
+}
+
+// The direction wo reflects to about the half vector of half slope hs; false below the horizon.
+bool reflectAboutHalfSlope(const Vec3& wo, DVec2 hs, Vec3& wi) {
+    const DVec3 h = glm::normalize(DVec3(-hs.x, -hs.y, 1.0));
+    const DVec3 o(wo);
+    const DVec3 w = 2.0 * glm::dot(o, h) * h - o;
+    if (!(w.z > 0.0)) return false;
+    wi = Vec3(glm::normalize(w));
+    return true;
+}
+
 }  // namespace
 
 bool glintSamplePolygonByCells(const Dictionary& dict, const GlintParams& p, const GlintShape& shape,
@@ -644,15 +662,8 @@ bool glintSamplePolygonByCells(const Dictionary& dict, const GlintParams& p, con
             y0 = std::min(y0, rot[e].y), y1 = std::max(y1, rot[e].y);
         }
         DVec2 m;
-        if (rec.piece < 0) {
-            // N(0, σ_o²) per axis restricted to the box: F(x) = erf(x / (σ_o √2)) / 2, inverted with erfinvF.
-            const double ir = 1.0 / (kSigmaO * std::sqrt(2.0));
-            auto inv = [&](double lo, double hi, double v) {
-                const double fl = 0.5 * std::erf(lo * ir), fh = 0.5 * std::erf(hi * ir);
-                const double t = std::clamp(2.0 * (fl + v * (fh - fl)), -0.9999999, 0.9999999);
-                return double(erfinvF(float(t))) / ir;
-            };
-            m = DVec2(inv(x0, x1, a), inv(y0, y1, b));
+        if (rec.piece < 0) {  // N(0, σ_o²) per axis restricted to the box
+            m = DVec2(truncatedGaussianInverse(x0, x1, a), truncatedGaussianInverse(y0, y1, b));
         } else {
             const CellDraw& d = rec.draw;
             auto inv = [&](int marginal, double lo, double hi, double v) {
@@ -665,13 +676,7 @@ bool glintSamplePolygonByCells(const Dictionary& dict, const GlintParams& p, con
         }
         if (!insidePolygon(rot.data(), pc.n, m)) continue;
         const DVec2 mu(c * m.x - sn * m.y, sn * m.x + c * m.y);  // Rot(θ): back to M^-1 space
-        const DVec2 hs(m00 * mu.x + m01 * mu.y, m11 * mu.y);
-        const DVec3 h = glm::normalize(DVec3(-hs.x, -hs.y, 1.0));
-        const DVec3 o(wo);
-        const DVec3 w = 2.0 * glm::dot(o, h) * h - o;
-        if (!(w.z > 0.0)) continue;
-        wi = Vec3(glm::normalize(w));
-        return true;
+        if (reflectAboutHalfSlope(wo, DVec2(m00 * mu.x + m01 * mu.y, m11 * mu.y), wi)) return true;
     }
     return glintSamplePolygon(vertices, count, u, seed, wi);  // no try landed inside: the cosine-weighted fallback
 }
@@ -818,26 +823,14 @@ bool flakeSamplePolygon(const FlakeSet& flakes, float sigmaF, const Vec3& wo, co
         x0 = std::min(x0, q[e].x), x1 = std::max(x1, q[e].x);
         y0 = std::min(y0, q[e].y), y1 = std::max(y1, q[e].y);
     }
-    const double ir = 1.0 / (kSigmaO * std::sqrt(2.0));
-    auto inv = [&](double lo, double hi, double v) {
-        const double fl = 0.5 * std::erf(lo * ir), fh = 0.5 * std::erf(hi * ir);
-        const double t = std::clamp(2.0 * (fl + v * (fh - fl)), -0.9999999, 0.9999999);
-        return double(erfinvF(float(t))) / ir;
-    };
     const double back = double(sigmaF) / kSigmaO;
     uint64_t state = seed ^ 0x5EEDF1A4EULL;
     for (int attempt = 0; attempt < 32; ++attempt) {
         const double a = attempt == 0 ? ux : unit(splitMix(state));
         const double b = attempt == 0 ? double(u.y) : unit(splitMix(state));
-        const DVec2 m(inv(x0, x1, a), inv(y0, y1, b));
+        const DVec2 m(truncatedGaussianInverse(x0, x1, a), truncatedGaussianInverse(y0, y1, b));
         if (!insidePolygon(q, n, m)) continue;
-        const DVec2 hs = DVec2(flake.slope) + m * back;
-        const DVec3 h = glm::normalize(DVec3(-hs.x, -hs.y, 1.0));
-        const DVec3 o(wo);
-        const DVec3 w = 2.0 * glm::dot(o, h) * h - o;
-        if (!(w.z > 0.0)) continue;
-        wi = Vec3(glm::normalize(w));
-        return true;
+        if (reflectAboutHalfSlope(wo, DVec2(flake.slope) + m * back, wi)) return true;
     }
     return glintSamplePolygon(vertices, count, u, seed, wi);
 }

@@ -192,6 +192,16 @@ public:
         out.push_back({"ggaa", {p_.ggaa ? 1.0 : 0.0}});
         out.push_back({"footprint_duv", {in_.duvdx.x, in_.duvdx.y, in_.duvdy.x, in_.duvdy.y}});
         if (p_.flakeSize > 0.f) out.push_back({"flakes", {p_.flakeSize, flakeSigma_, flakeWeight_}});
+        // At close range the lobe is the footprint's platelets: the slope of the plane they make (their weighted mean
+        // slope), whose projected area wo.z - wo.xy . slope is what a tilted platelet reflects with (as a normal map's
+        // shading normal, or bsdf.beckmann_lean's mean plane): a platelet facing the viewer reflects up to twice the
+        // light of the geometric plane's area, the surface's mean stays the converged lobe (glint_flakes.h).
+        if (flakeWeight_ >= 1.f && flakes_.count > 0) {
+            Vec2 mean(0.f);
+            for (int k = 0; k < flakes_.count; ++k) mean += flakes_.weight[k] * flakes_.flakes[k].slope;
+            mean /= flakes_.covered;
+            out.push_back({"plane_slope", {mean.x, mean.y}});
+        }
     }
     // Quad lights (issue 11 item 2): the per-cell polygon integral and the shadow-ray direction (glint_area.cpp).
     bool integratePolygon(const LobeQuery& q, const Vec3* vertices, int count, Color3& result) const override;
