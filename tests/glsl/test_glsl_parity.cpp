@@ -212,6 +212,9 @@ struct ParityResult {
     float maxErr = 0.f;
     int worstSample = -1, worstFloat = -1;
     float worstCpu = 0.f, worstGpu = 0.f;
+    // bsdf.glint with flakes: samples with f > 0 whose flakes' weight (LobeParameters "flakes") is 1, between 0 and 1,
+    // and 0 (explicit flakes, the hand-over, the counting at one microfacet per flake).
+    int flakeRegimes[3] = {0, 0, 0};
 };
 
 ParityResult runParity(const NodeSpec& s, std::string* failure) {
@@ -264,6 +267,20 @@ ParityResult runParity(const NodeSpec& s, std::string* failure) {
         // bsdf.ltc_normal_map: footprints spread over all its MIP regimes, not only the coarse levels the port
         // range gives on the 16² map (|duv| ~ 0.3: level ~2.3): scaled by 2^-(j mod 6), so the MIP-0 texels, the
         // MIP 0-1 blend and the stored levels' trilinear filter are all compared.
+        // bsdf.glint: half the samples without flakes (the counted glints at their own log_density), the other half
+        // with flakes of 0.002-0.01 and, in every other one of those, a footprint a tenth as large, so the grid holds the
+        // explicit flakes, the hand-over and the counting at one microfacet per flake (flakeRegimes counts them).
+        if (s.id == "bsdf.glint") {
+            const int fs = L.inOffset[size_t(s.inputIndex("flake_size"))];
+            if (j % 2 == 0) {
+                d[fs] = 0.f;
+            } else {
+                d[fs] = rnd(0.002f, 0.01f);
+                if (j % 4 == 1)
+                    for (const char* name : {"duvdx", "duvdy"})
+                        for (int c = 0; c < 2; ++c) d[L.inOffset[size_t(s.inputIndex(name))] + c] *= 0.1f;
+            }
+        }
         if (s.id == "bsdf.ltc_normal_map")
             for (const char* name : {"duvdx", "duvdy"})
                 for (int c = 0; c < 2; ++c) d[L.inOffset[size_t(s.inputIndex(name))] + c] *= std::ldexp(1.f, -(j % 6));
@@ -364,6 +381,10 @@ ParityResult runParity(const NodeSpec& s, std::string* failure) {
             if (s.outputs[k].type == TypeDesc::Closure) {
                 Color3 f = test::query(cl, wo, wi, lightDistance).f.total();
                 cpu.insert(cpu.end(), {f.x, f.y, f.z, em.x, em.y, em.z});
+                LobeParameters params;
+                if (cl.size() == 1 && f.x + f.y + f.z > 0.f) cl.lobe(0)->parameters(LobeQuery{wo, wi}, params);
+                for (const auto& [name, v] : params)
+                    if (name == "flakes" && v.size() == 3) ++res.flakeRegimes[v[2] >= 1.0 ? 0 : v[2] > 0.0 ? 1 : 2];
             } else {
                 for (int c = 0; c < typeWidth(s.outputs[k].type); ++c) cpu.push_back(r[prog.rootRegister(k) + c]);
             }
@@ -397,6 +418,11 @@ TEST_P(GlslParity, NodeMatchesCpu) {
     ParityResult r = runParity(*s, &failure);
     ASSERT_TRUE(failure.empty()) << failure;
     std::printf("PARITY %-28s max_rel_err %.3g  tolerance %.3g\n", s->id.c_str(), r.maxErr, s->parityTolerance);
+    if (s->id == "bsdf.glint") {
+        std::printf("  flakes (f > 0): %d explicit, %d in the hand-over, %d counted at one microfacet per flake\n",
+                    r.flakeRegimes[0], r.flakeRegimes[1], r.flakeRegimes[2]);
+        for (int k = 0; k < 3; ++k) EXPECT_GE(r.flakeRegimes[k], 20) << "flake regime " << k << " hardly sampled";
+    }
     EXPECT_LE(r.maxErr, s->parityTolerance) << "sample " << r.worstSample << " output float " << r.worstFloat << ": cpu "
                                             << r.worstCpu << " gpu " << r.worstGpu;
 }
