@@ -334,6 +334,9 @@ void spc_bsdf_glint(SpeculaClosureQuery q, SpeculaShadingInputs s, sampler1DArra
         float width = footprintValid ? sqrt(sqrt(dot(a1, a1) * dot(a2, a2))) : 0.0;
         float x = clamp((width / flake_size - 0.5) / 0.5, 0.0, 1.0);
         we = width > 0.0 ? 1.0 - x * x * (3.0 - 2.0 * x) : 1.0;
+    }
+    // Only where the flakes show (as the CPU lobe, which finds them only then): 16 Voronoi searches per fragment.
+    if (we > 0.0) {
         float ea = sx * sx, ec = sy * sy, eb = r * sx * sy;
         float minEigen = 0.5 * (ea + ec - sqrt((ea - ec) * (ea - ec) + 4.0 * eb * eb));
         float sf = max(min(flake_roughness >= 1e-3 ? flake_roughness : 1e-3, sqrt(0.8 * max(minEigen, 0.0))), 1e-4);

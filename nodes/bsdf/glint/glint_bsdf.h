@@ -74,17 +74,6 @@ inline float glintFCosCells(const Dictionary& dict, const GlintParams& p, const 
 // can be 0, and MIS needs pdf > 0 there to stay unbiased.
 constexpr float kGlintBeckmannFraction = 0.15f;
 
-// The glint lobe of the renderer: eval = F(wo.h) * f cos with the GGAA-filtered P. Sampling (issue 11 item 3): a
-// mixture of the glint distribution of this shading point (GlintCellSet::sampleSlope) and, with probability
-// kGlintBeckmannFraction, the limiting Beckmann lobe. Exact pdf, with dw_h = d(slope) h_z^3 (D h_z dw_h = P22 d(slope))
-// and dw_i = 4 (wo.h) dw_h:
-//   pdf(wi) = [beta P_B(h~) + (1 - beta) P_unfiltered(h~) / keptWeight] / h_z^3 / (4 wo.h).
-// With explicit flakes (GlintParams::flakeSize > 0, glint_flakes.h) the slope density is w_e P_flakes + (1 - w_e) P:
-// the footprint's flakes (findFlakes: box-filtered over the footprint) with weight w_e = flakeWeight(footprint), and
-// the sampler picks them with probability w_e (where the footprint holds a flake; a flake by its weight), the mixture
-// above otherwise.
-// The cells are built on the first query and shared by every later query of the shading point (the lobe lives in
-// one thread's scratch arena for one shading point); a lobe whose flakes take the whole weight never builds them.
 // The two shares of one polygon query (glint_area.cpp): (1 - w_e) x the counted cells' integral and w_e x the flakes',
 // each without F, with the half vectors F is read at; kept by the lobe for the light it was asked about last, so that
 // samplePolygon, asked right after integratePolygon for the same light, does not integrate again.
@@ -105,6 +94,17 @@ struct GlintPolygonShares {
     }
 };
 
+// The glint lobe of the renderer: eval = F(wo.h) * f cos with the GGAA-filtered P. Sampling (issue 11 item 3): a
+// mixture of the glint distribution of this shading point (GlintCellSet::sampleSlope) and, with probability
+// kGlintBeckmannFraction, the limiting Beckmann lobe. Exact pdf, with dw_h = d(slope) h_z^3 (D h_z dw_h = P22 d(slope))
+// and dw_i = 4 (wo.h) dw_h:
+//   pdf(wi) = [beta P_B(h~) + (1 - beta) P_unfiltered(h~) / keptWeight] / h_z^3 / (4 wo.h).
+// With explicit flakes (GlintParams::flakeSize > 0, glint_flakes.h) the slope density is w_e P_flakes + (1 - w_e) P:
+// the footprint's flakes (findFlakes: box-filtered over the footprint) with weight w_e = flakeWeight(footprint), and
+// the sampler picks them with probability w_e (where the footprint holds a flake; a flake by its weight), the mixture
+// above otherwise.
+// The cells are built on the first query and shared by every later query of the shading point (the lobe lives in
+// one thread's scratch arena for one shading point); a lobe whose flakes take the whole weight never builds them.
 class GlintLobe final : public BsdfLobe {
 public:
     GlintLobe(const Dictionary& dict, const GlintParams& p, const GlintEvalInputs& in, const Fresnel& fresnel)
